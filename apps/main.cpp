@@ -1,0 +1,53 @@
+// The `rovermap` command: parses the command line, runs one subcommand, and turns
+// typed errors into messages and exit statuses (DESIGN.md §5).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "apps/Commands.hpp"
+#include "config/ConfigError.hpp"
+#include "io/IoError.hpp"
+
+namespace {
+
+using namespace rovermap::apps;
+
+}  // namespace
+
+void rovermap::apps::AddConfigOptions(CLI::App* cmd, ConfigArgs* args) {
+  cmd->add_option("--config", args->config_file, "YAML config file (see config/default.yaml)");
+  cmd->add_option("--set", args->overrides, "Override one config key: --set key=value (repeatable)")
+      ->take_all();
+}
+
+int main(int argc, char** argv) {
+  CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Help for every subcommand");
+
+  RegisterArgs register_args;
+  CLI::App* register_cmd = AddRegisterCommand(&app, &register_args);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);  // prints help (code 0) or the parse error
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+
+  try {
+    if (register_cmd->parsed()) return RunRegister(register_args);
+  } catch (const rovermap::config::ConfigError& e) {
+    std::cerr << "rovermap: config error: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const UsageError& e) {
+    std::cerr << "rovermap: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const rovermap::io::IoError& e) {
+    std::cerr << "rovermap: " << e.what() << "\n";
+    return kExitFailure;
+  } catch (const std::exception& e) {
+    std::cerr << "rovermap: error: " << e.what() << "\n";
+    return kExitFailure;
+  }
+  return kExitUsage;
+}

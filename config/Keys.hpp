@@ -1,0 +1,154 @@
+#pragma once
+
+// Internal to config/: the table of keys behind LoadConfig and DumpYaml. It includes yaml-cpp,
+// so nothing outside config/ may include it.
+
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "config/Config.hpp"
+
+namespace rovermap::config::detail {
+
+/// A value was rejected. The message says why ("must be > 0 (got -3)"); the caller prefixes
+/// the file, line and key.
+class ValueError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// One dotted key: how to read it into a Config and how to print its current value.
+struct KeyEntry {
+  std::string key;  ///< "registration.max_iterations"
+  std::string doc;  ///< "[count] ...": the comment DumpYaml writes after the value
+  std::function<void(const YAML::Node&, Config&)> parse;  ///< @throw ValueError
+  std::function<std::string(const Config&)> print;        ///< YAML text that parses back
+};
+
+/// Every key, grouped by section, in DumpYaml order.
+const std::vector<KeyEntry>& Registry();
+
+/// The valid range of a number; each end open or closed, infinite when absent.
+struct Bounds {
+  double lo = -std::numeric_limits<double>::infinity();
+  bool lo_open = false;
+  double hi = std::numeric_limits<double>::infinity();
+  bool hi_open = false;
+};
+inline Bounds AnyValue() { return {}; }
+inline Bounds AtLeast(double lo) { return {lo, false}; }
+inline Bounds GreaterThan(double lo) { return {lo, true}; }
+/// (lo, hi]
+inline Bounds OpenClosed(double lo, double hi) { return {lo, true, hi, false}; }
+/// [lo, hi)
+inline Bounds ClosedOpen(double lo, double hi) { return {lo, false, hi, true}; }
+/// "> 0", "in (0, 1]", or "" when unbounded; messages say "must be " + this.
+std::string Describe(const Bounds& bounds);
+
+/// Scalar readers: strict (1.5 is not an int, "maybe" is not a bool). @throw ValueError
+std::string ScalarText(const YAML::Node& node);
+int ParseInt(const YAML::Node& node, const Bounds& bounds);
+double ParseDouble(const YAML::Node& node, const Bounds& bounds);
+bool ParseBool(const YAML::Node& node);
+/// Shortest text that reads back to the same double, always with a '.' or exponent.
+std::string FormatDouble(double value);
+
+/// The spelling of each enumerator in the YAML.
+template <typename E>
+using EnumNames = std::vector<std::pair<std::string, E>>;
+
+template <typename E>
+std::string JoinNames(const EnumNames<E>& names) {
+  std::string joined;
+  for (const auto& [name, value] : names) joined += (joined.empty() ? "" : "|") + name;
+  return joined;
+}
+
+template <typename E>
+E ParseEnum(const YAML::Node& node, const EnumNames<E>& names) {
+  const std::string text = ScalarText(node);
+  for (const auto& [name, value] : names) {
+    if (name == text) return value;
+  }
+  throw ValueError("must be one of " + JoinNames(names) + " (got " + text + ")");
+}
+
+template <typename E>
+std::string EnumName(E value, const EnumNames<E>& names) {
+  for (const auto& [name, candidate] : names) {
+    if (candidate == value) return name;
+  }
+  throw std::logic_error("config: enumerator without a name in its EnumNames table");
+}
+
+/// Adds the keys of one section (`Config::*section`) to a registry, one call per key, so a new
+/// struct field needs one line. DumpYaml comments each value with "[unit] doc; range".
+template <typename Section>
+class SectionKeys {
+ public:
+  SectionKeys(std::vector<KeyEntry>& keys, std::string name, Section Config::*section)
+      : keys_(keys), name_(std::move(name)), section_(section) {}
+
+  void Int(const std::string& key, int Section::*field, const std::string& unit, Bounds bounds,
+           const std::string& doc) {
+    Add(
+        key, Comment(unit, doc, bounds),
+        [s = section_, field, bounds](const YAML::Node& n, Config& c) {
+          (c.*s).*field = ParseInt(n, bounds);
+        },
+        [s = section_, field](const Config& c) { return std::to_string((c.*s).*field); });
+  }
+
+  void Double(const std::string& key, double Section::*field, const std::string& unit,
+              Bounds bounds, const std::string& doc) {
+    Add(
+        key, Comment(unit, doc, bounds),
+        [s = section_, field, bounds](const YAML::Node& n, Config& c) {
+          (c.*s).*field = ParseDouble(n, bounds);
+        },
+        [s = section_, field](const Config& c) { return FormatDouble((c.*s).*field); });
+  }
+
+  void Bool(const std::string& key, bool Section::*field, const std::string& doc) {
+    Add(
+        key, "[true|false] " + doc,
+        [s = section_, field](const YAML::Node& n, Config& c) { (c.*s).*field = ParseBool(n); },
+        [s = section_, field](const Config& c) { return (c.*s).*field ? "true" : "false"; });
+  }
+
+  template <typename E>
+  void Enum(const std::string& key, E Section::*field, const EnumNames<E>& names,
+            const std::string& doc) {
+    Add(
+        key, "[" + JoinNames(names) + "] " + doc,
+        [s = section_, field, names](const YAML::Node& n, Config& c) {
+          (c.*s).*field = ParseEnum(n, names);
+        },
+        [s = section_, field, names](const Config& c) { return EnumName((c.*s).*field, names); });
+  }
+
+ private:
+  static std::string Comment(const std::string& unit, const std::string& doc,
+                             const Bounds& bounds) {
+    const std::string range = Describe(bounds);
+    return "[" + unit + "] " + doc + (range.empty() ? "" : "; " + range);
+  }
+
+  void Add(const std::string& key, std::string doc,
+           std::function<void(const YAML::Node&, Config&)> parse,
+           std::function<std::string(const Config&)> print) {
+    keys_.push_back({name_ + "." + key, std::move(doc), std::move(parse), std::move(print)});
+  }
+
+  std::vector<KeyEntry>& keys_;
+  std::string name_;
+  Section Config::*section_;
+};
+
+}  // namespace rovermap::config::detail

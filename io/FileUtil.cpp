@@ -1,0 +1,123 @@
+#include "io/FileUtil.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <random>
+#include <system_error>
+
+#include "io/IoError.hpp"
+
+namespace rovermap::io {
+namespace {
+
+[[noreturn]] void ThrowErrno(const std::filesystem::path& path, const char* what, int err) {
+  throw IoError(path.string() + ": " + what + " (" + std::strerror(err) + ")");
+}
+
+// Closes the descriptor on every exit path, including exceptions.
+class FdGuard {
+ public:
+  explicit FdGuard(int fd) : fd_(fd) {}
+  ~FdGuard() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FdGuard(const FdGuard&) = delete;
+  FdGuard& operator=(const FdGuard&) = delete;
+  int Get() const { return fd_; }
+  // Closes explicitly so that a deferred write error (NFS, full disk) is seen.
+  int Close() {
+    const int rc = ::close(fd_);
+    fd_ = -1;
+    return rc;
+  }
+
+ private:
+  int fd_;
+};
+
+std::string RandomSuffix() {
+  static constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+  std::random_device device;
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(sizeof(kAlphabet)) - 2);
+  std::string suffix(6, 'x');
+  for (char& c : suffix) c = kAlphabet[pick(device)];
+  return suffix;
+}
+
+}  // namespace
+
+std::string ReadWholeFile(const std::filesystem::path& path) {
+  FdGuard fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (fd.Get() < 0) ThrowErrno(path, "cannot open file", errno);
+  struct stat info {};
+  if (::fstat(fd.Get(), &info) != 0) ThrowErrno(path, "cannot stat file", errno);
+  if (S_ISDIR(info.st_mode)) throw IoError(path.string() + ": is a directory, not a file");
+
+  std::string data;
+  if (S_ISREG(info.st_mode) && info.st_size > 0) {
+    data.reserve(static_cast<std::size_t>(info.st_size));
+  }
+  // Read until EOF rather than trusting st_size: the file may be a pipe or still growing.
+  char chunk[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd.Get(), chunk, sizeof(chunk));
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      ThrowErrno(path, "cannot read file", errno);
+    }
+    data.append(chunk, static_cast<std::size_t>(n));
+  }
+  return data;
+}
+
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents) {
+  if (path.empty() || !path.has_filename()) {
+    throw IoError(path.string() + ": not a file path");
+  }
+  std::filesystem::path temp;
+  int raw_fd = -1;
+  for (int attempt = 0; attempt < 100 && raw_fd < 0; ++attempt) {
+    temp = path;
+    temp += ".tmp-" + RandomSuffix();
+    // O_EXCL: never clobber another writer's temporary; 0666 lets the umask decide.
+    raw_fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (raw_fd < 0 && errno != EEXIST) ThrowErrno(path, "cannot create temporary file", errno);
+  }
+  if (raw_fd < 0) throw IoError(path.string() + ": cannot create a unique temporary file");
+
+  FdGuard fd(raw_fd);
+  const auto fail = [&](const char* what, int err) {
+    if (fd.Get() >= 0) fd.Close();
+    ::unlink(temp.c_str());
+    ThrowErrno(path, what, err);
+  };
+  const char* data = contents.data();
+  std::size_t left = contents.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd.Get(), data, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("cannot write file", errno);
+    }
+    data += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  // Flush before the rename so that a crash cannot leave a renamed but empty file.
+  if (::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
+  if (fd.Close() != 0) fail("cannot close file", errno);
+
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    ::unlink(temp.c_str());
+    throw IoError(path.string() + ": cannot rename temporary file into place (" + ec.message() +
+                  ")");
+  }
+}
+
+}  // namespace rovermap::io

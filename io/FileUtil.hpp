@@ -1,0 +1,19 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace rovermap::io {
+
+/// Reads a whole file into memory (binary, unchanged bytes).
+/// Throws IoError naming the file if it is missing, a directory or unreadable.
+std::string ReadWholeFile(const std::filesystem::path& path);
+
+/// Writes `contents` to `path` atomically: the bytes go to `<path>.tmp-XXXXXX` in the same
+/// directory, are flushed to disk, and the temporary is renamed over `path`. Readers therefore
+/// see either the old file or the complete new one, never a partial file. On failure the
+/// temporary is removed and IoError (naming `path`) is thrown.
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
+
+}  // namespace rovermap::io

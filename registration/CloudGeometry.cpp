@@ -1,0 +1,78 @@
+#include "registration/CloudGeometry.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+namespace rovermap::registration {
+
+std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>& points,
+                                             const KdTree& tree, int k) {
+  std::vector<Eigen::Vector3d> normals(points.size(), Eigen::Vector3d::Zero());
+  const auto n = static_cast<long>(points.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long i = 0; i < n; ++i) {
+    const auto neighbors = tree.FindKNearest(points[i], static_cast<std::size_t>(k));
+    if (neighbors.size() < 3) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& nb : neighbors) mean += points[nb.index];
+    mean /= static_cast<double>(neighbors.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& nb : neighbors) {
+      const Eigen::Vector3d d = points[nb.index] - mean;
+      cov += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
+    if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) continue;
+    normals[i] = eig.eigenvectors().col(0).normalized();
+  }
+  return normals;
+}
+
+std::vector<Eigen::Vector3d> EstimateTangents(const PointCloud& cloud) {
+  const auto& p = cloud.points;
+  const std::size_t n = p.size();
+  std::vector<Eigen::Vector3d> tangents(n, Eigen::Vector3d::Zero());
+  auto same_chain = [&](std::size_t a, std::size_t b) {
+    return !cloud.HasChains() || cloud.chain_ids[a] == cloud.chain_ids[b];
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool has_prev = i > 0 && same_chain(i - 1, i);
+    const bool has_next = i + 1 < n && same_chain(i, i + 1);
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    if (has_prev && has_next) {
+      d = p[i + 1] - p[i - 1];
+    } else if (has_next) {
+      d = p[i + 1] - p[i];
+    } else if (has_prev) {
+      d = p[i] - p[i - 1];
+    }
+    const double len = d.norm();
+    if (len > 0.0) tangents[i] = d / len;
+  }
+  return tangents;
+}
+
+double MedianNeighborSpacing(const std::vector<Eigen::Vector3d>& points, const KdTree& tree,
+                             std::size_t max_samples) {
+  if (points.size() < 2) return 0.0;
+  const std::size_t step = std::max<std::size_t>(1, points.size() / std::max<std::size_t>(1, max_samples));
+  std::vector<double> spacing;
+  spacing.reserve(points.size() / step + 1);
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    // A few neighbours so that exact duplicates do not hide the real spacing.
+    for (const auto& nb : tree.FindKNearest(points[i], 4)) {
+      if (nb.squared_distance > 0.0) {
+        spacing.push_back(std::sqrt(nb.squared_distance));
+        break;
+      }
+    }
+  }
+  if (spacing.empty()) return 0.0;
+  auto mid = spacing.begin() + static_cast<long>(spacing.size() / 2);
+  std::nth_element(spacing.begin(), mid, spacing.end());
+  return *mid;
+}
+
+}  // namespace rovermap::registration

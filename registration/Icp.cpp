@@ -1,0 +1,431 @@
+#include "registration/Icp.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "registration/CloudGeometry.hpp"
+#include "registration/MotionSolver.hpp"
+
+namespace rovermap::registration {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+bool NeedsOrientations(const RegistrationOptions& o) {
+  return o.orientation_threshold_deg > 0.0 || o.residual == Residual::kPointToPlane;
+}
+
+// A pair between source point `source_index` and target point `target_index`.
+struct Match {
+  std::size_t source_index = 0;
+  std::size_t target_index = 0;
+  double distance = 0.0;  // ‖T x − y‖ [m]
+  bool backward = false;  // found by a target -> source query (symmetric criterion)
+};
+
+// Closest points of every `step`-th point of `from`, mapped by T_to_from, in `to`,
+// within `dmax` and passing the orientation test (Zhang 1994, §4.1 and §4.2).
+void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
+                    const Eigen::Isometry3d& T_to_from, double dmax, double min_abs_cos,
+                    std::size_t step, bool backward, std::vector<Match>* out) {
+  const auto& pts = from.cloud().points;
+  const long queries = static_cast<long>((pts.size() + step - 1) / step);
+  std::vector<Match> local(static_cast<std::size_t>(queries));
+  std::vector<char> valid(static_cast<std::size_t>(queries), 0);
+  const bool check_orientation = min_abs_cos > 0.0;
+  const Eigen::Matrix3d rotation = T_to_from.linear();
+#pragma omp parallel for schedule(dynamic, 512)
+  for (long q = 0; q < queries; ++q) {
+    const std::size_t i = static_cast<std::size_t>(q) * step;
+    const Neighbor nb = to.tree().FindClosest(T_to_from * pts[i], dmax);
+    if (!nb.found) continue;
+    if (check_orientation) {
+      const Eigen::Vector3d& a = from.orientations()[i];
+      const Eigen::Vector3d& b = to.orientations()[nb.index];
+      // Unknown orientation (zero vector) cannot be tested: keep the pair.
+      if (!a.isZero() && !b.isZero() && std::abs((rotation * a).dot(b)) < min_abs_cos) continue;
+    }
+    const auto k = static_cast<std::size_t>(q);
+    local[k] = backward ? Match{nb.index, i, std::sqrt(nb.squared_distance), true}
+                        : Match{i, nb.index, std::sqrt(nb.squared_distance), false};
+    valid[k] = 1;
+  }
+  for (std::size_t k = 0; k < local.size(); ++k)
+    if (valid[k]) out->push_back(local[k]);
+}
+
+// Combined covariance of a pair's residual, R Λx Rᵀ + Λy (§4.4), plus an isotropic
+// `sampling_variance` for the offset between non-coincident samples, which the sensor
+// covariance does not describe (without it the gate rejects most pairs of data sampled
+// coarser than its noise).
+Eigen::Matrix3d PairCovariance(const PointCloud& source, const PointCloud& target,
+                               const Match& m, const Eigen::Matrix3d& rotation,
+                               double sampling_variance) {
+  return rotation * source.covariances[m.source_index] * rotation.transpose() +
+         target.covariances[m.target_index] +
+         sampling_variance * Eigen::Matrix3d::Identity();
+}
+
+// Unit normal of a point-to-plane pair: the target's, or the rotated source's for a
+// backward (target -> source) pair. Zero when unknown.
+Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
+                           const Eigen::Matrix3d& rotation) {
+  return m.backward ? Eigen::Vector3d(rotation * source.orientations()[m.source_index])
+                    : target.orientations()[m.target_index];
+}
+
+// Step d: a pair is kept within Dmax, or with use_uncertainty within the χ² gate on the
+// squared Mahalanobis distance dᵀ(R Λx Rᵀ + Λy)⁻¹ d (§4.4) instead.
+bool PassesGate(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
+                const Eigen::Isometry3d& T, double dmax, double sampling_variance,
+                const RegistrationOptions& options) {
+  if (!options.use_uncertainty) return m.distance <= dmax;
+  const Eigen::Vector3d d =
+      T * source.cloud().points[m.source_index] - target.cloud().points[m.target_index];
+  const Eigen::Matrix3d cov =
+      PairCovariance(source.cloud(), target.cloud(), m, T.linear(), sampling_variance);
+  return d.dot(cov.ldlt().solve(d)) <= options.mahalanobis_gate;
+}
+
+// §4.4 weight 1 / tr(R Λx Rᵀ + Λy) for point-to-point; for point-to-plane the inverse
+// variance of the residual along the normal, 1 / nᵀ(R Λx Rᵀ + Λy)n.
+double UncertaintyWeight(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
+                         const Eigen::Matrix3d& rotation, double sampling_variance,
+                         const RegistrationOptions& options) {
+  if (options.residual == Residual::kPointToPlane) {
+    const Eigen::Vector3d n = PairNormal(source, target, m, rotation);
+    const double var = n.dot(PairCovariance(source.cloud(), target.cloud(), m, rotation, 0.0) * n);
+    return var > 0.0 ? 1.0 / var : 0.0;
+  }
+  return 1.0 /
+         PairCovariance(source.cloud(), target.cloud(), m, rotation, sampling_variance).trace();
+}
+
+Eigen::Isometry3d ExpLeft(const Eigen::Matrix<double, 6, 1>& delta, const Eigen::Isometry3d& T) {
+  const Eigen::Vector3d omega = delta.head<3>();
+  const double angle = omega.norm();
+  Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
+  if (angle > 0.0) update.linear() = Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix();
+  update.translation() = delta.tail<3>();
+  return update * T;
+}
+
+// One Gauss-Newton step of the point-to-plane residual nᵀ(T x − y) for a left
+// perturbation (ω, v): J = [p × n, n]. A tiny damping keeps planar scenes solvable.
+bool PointToPlaneStep(const IndexedCloud& source, const IndexedCloud& target,
+                      const std::vector<Match>& matches, const std::vector<double>& weights,
+                      Eigen::Isometry3d* T) {
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+  const Eigen::Matrix3d rotation = T->linear();
+  std::size_t used = 0;
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    const Match& m = matches[k];
+    const Eigen::Vector3d n = PairNormal(source, target, m, rotation);
+    if (n.isZero() || !(weights[k] > 0.0)) continue;
+    const Eigen::Vector3d p = *T * source.cloud().points[m.source_index];
+    const double e = n.dot(p - target.cloud().points[m.target_index]);
+    Eigen::Matrix<double, 6, 1> j;
+    j << p.cross(n), n;
+    h += weights[k] * j * j.transpose();
+    g += weights[k] * j * e;
+    ++used;
+  }
+  if (used < 6) return false;
+  h.diagonal().array() += 1e-9 * std::max(1e-12, h.trace());
+  const Eigen::Matrix<double, 6, 1> delta = h.ldlt().solve(-g);
+  if (!delta.allFinite()) return false;
+  *T = ExpLeft(delta, *T);
+  return true;
+}
+
+Eigen::Vector3d RotationVector(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+bool RelativeConverged(const Eigen::Isometry3d& T_old, const Eigen::Isometry3d& T_new,
+                       double tolerance, double translation_guard_m) {
+  // Zhang 1994, §4.3 step 3f, with an absolute guard for near-zero motion.
+  const Eigen::Vector3d r_old = RotationVector(T_old.linear());
+  const Eigen::Vector3d r_new = RotationVector(T_new.linear());
+  const double dr = (r_new - r_old).norm();
+  const double dt = (T_new.translation() - T_old.translation()).norm();
+  const bool r_ok = dr < tolerance * r_new.norm() || dr < 1e-7;
+  const bool t_ok = dt < tolerance * T_new.translation().norm() || dt < translation_guard_m;
+  return r_ok && t_ok;
+}
+
+// Information of the estimate from the final pairs (see RegistrationResult).
+void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
+                        const std::vector<Match>& matches, const Eigen::Isometry3d& T,
+                        double sampling_variance, const RegistrationOptions& options,
+                        RegistrationResult* result) {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  Mat6 info = Mat6::Zero();
+  const Eigen::Matrix3d rotation = T.linear();
+  const bool plane = options.residual == Residual::kPointToPlane;
+  double sum_sq = 0.0;
+  std::size_t n = 0;
+  for (const Match& m : matches) {
+    if (m.backward) continue;
+    const Eigen::Vector3d p = T * source.cloud().points[m.source_index];
+    const Eigen::Vector3d d = p - target.cloud().points[m.target_index];
+    Eigen::Matrix<double, 3, 6> j;
+    j.leftCols<3>() << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;  // −[p]×
+    j.rightCols<3>().setIdentity();
+    if (plane) {
+      const Eigen::Vector3d& nrm = target.orientations()[m.target_index];
+      if (nrm.isZero()) continue;
+      const Eigen::Matrix<double, 1, 6> jp = nrm.transpose() * j;
+      const double e = nrm.dot(d);
+      if (options.use_uncertainty) {
+        const double var =
+            nrm.dot(PairCovariance(source.cloud(), target.cloud(), m, rotation, 0.0) * nrm);
+        if (var > 0.0) info += jp.transpose() * jp / var;
+      } else {
+        info += jp.transpose() * jp;
+      }
+      sum_sq += e * e;
+    } else if (options.use_uncertainty) {
+      const Eigen::Matrix3d cov =
+          PairCovariance(source.cloud(), target.cloud(), m, rotation, sampling_variance);
+      info += j.transpose() * cov.inverse() * j;
+      sum_sq += d.squaredNorm();
+    } else {
+      info += j.transpose() * j;
+      sum_sq += d.squaredNorm();
+    }
+    ++n;
+  }
+  const double dof = plane ? static_cast<double>(n) - 6.0 : 3.0 * static_cast<double>(n) - 6.0;
+  if (n < 3 || dof <= 0.0) return;
+  // Without per-point covariances the residual variance is estimated from the fit.
+  if (!options.use_uncertainty) info /= std::max(sum_sq / dof, 1e-24);
+  result->information = info;
+  const Eigen::FullPivLU<Mat6> lu(info);
+  if (lu.isInvertible()) result->covariance = lu.inverse();
+
+  // Conditioning with rotations scaled to metres at the cloud's extent.
+  double extent = 0.0;
+  for (const Match& m : matches)
+    extent = std::max(extent, (T * source.cloud().points[m.source_index] - T.translation()).norm());
+  Mat6 s = Mat6::Identity();
+  s.topLeftCorner<3, 3>() *= 1.0 / std::max(extent, 1e-9);
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(s * info * s);
+  const auto ev = eig.eigenvalues();
+  result->conditioning = ev(5) > 0.0 ? std::max(0.0, ev(0)) / ev(5) : 0.0;
+}
+
+}  // namespace
+
+const char* ToString(RegistrationStatus status) {
+  switch (status) {
+    case RegistrationStatus::kConverged: return "converged";
+    case RegistrationStatus::kMaxIterations: return "max_iterations";
+    case RegistrationStatus::kTooFewPoints: return "too_few_points";
+    case RegistrationStatus::kTooFewPairs: return "too_few_pairs";
+    case RegistrationStatus::kSolverFailed: return "solver_failed";
+    case RegistrationStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+IndexedCloud::IndexedCloud(PointCloud cloud, const RegistrationOptions& options)
+    : cloud_(std::move(cloud)), tree_(std::make_unique<KdTree>(cloud_.points)) {
+  if (NeedsOrientations(options)) {
+    if (options.geometry == Geometry::kCurve) {
+      orientations_ = EstimateTangents(cloud_);
+    } else if (cloud_.HasNormals()) {
+      orientations_ = cloud_.normals;
+    } else {
+      orientations_ = EstimateNormals(cloud_.points, *tree_, options.normal_neighbors);
+    }
+  }
+  spacing_ = MedianNeighborSpacing(cloud_.points, *tree_);
+}
+
+RegistrationResult Register(const PointCloud& source, const PointCloud& target,
+                            const Eigen::Isometry3d& T_init, const RegistrationOptions& options) {
+  const IndexedCloud s(source, options), t(target, options);
+  return Register(s, t, T_init, options);
+}
+
+RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& target,
+                            const Eigen::Isometry3d& T_init, const RegistrationOptions& options) {
+  RegistrationResult result;
+  result.T_target_source = T_init;
+  if (source.cloud().size() < 3 || target.cloud().size() < 3) {
+    result.status = RegistrationStatus::kTooFewPoints;
+    result.message = "need at least 3 points in each cloud (source " +
+                     std::to_string(source.cloud().size()) + ", target " +
+                     std::to_string(target.cloud().size()) + ")";
+    return result;
+  }
+  const bool symmetric = options.criterion == Criterion::kSymmetric;
+  if (options.use_uncertainty &&
+      (!source.cloud().HasCovariances() || !target.cloud().HasCovariances())) {
+    result.status = RegistrationStatus::kInvalidInput;
+    result.message = "use_uncertainty needs per-point covariances in both clouds";
+    return result;
+  }
+  if (NeedsOrientations(options) &&
+      (target.orientations().size() != target.cloud().size() ||
+       source.orientations().size() != source.cloud().size())) {
+    result.status = RegistrationStatus::kInvalidInput;
+    result.message = "clouds were indexed without orientations the options need";
+    return result;
+  }
+
+  // D and the initial Dmax = 20 D (§4.3).
+  const double d_ref =
+      options.reference_distance_m > 0.0 ? options.reference_distance_m : target.spacing();
+  result.reference_distance_m = d_ref;
+  if (!(d_ref > 0.0)) {
+    result.status = RegistrationStatus::kTooFewPoints;
+    result.message = "cannot derive the reference distance D: target points coincide";
+    return result;
+  }
+  double dmax = options.dmax_initial_factor * d_ref;
+  const double min_abs_cos = options.orientation_threshold_deg > 0.0
+                                 ? std::cos(options.orientation_threshold_deg * kDegToRad)
+                                 : 0.0;
+  // Per-axis variance of the offset between two independent samplings of spacing D.
+  const double sampling_variance = d_ref * d_ref / 12.0;
+  const double translation_tol =
+      options.translation_tolerance_m > 0.0 ? options.translation_tolerance_m : d_ref / 100.0;
+
+  Eigen::Isometry3d T = T_init;
+  std::vector<Match> matches;
+  std::vector<double> distances, weights;
+  std::vector<WeightedPair> pairs;
+  result.status = RegistrationStatus::kMaxIterations;
+
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    const bool coarse = options.coarse_to_fine && it <= options.coarse_iterations;
+    const std::size_t step = coarse ? static_cast<std::size_t>(options.coarse_step) : 1;
+
+    // a. Closest points within Dmax, both ways for the symmetric criterion.
+    matches.clear();
+    MatchDirection(source, target, T, dmax, min_abs_cos, step, false, &matches);
+    std::size_t queries = (source.cloud().size() + step - 1) / step;
+    if (symmetric) {
+      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, step, true, &matches);
+      queries += (target.cloud().size() + step - 1) / step;
+    }
+
+    // b, c. Statistics of the distances and the new Dmax.
+    distances.clear();
+    for (const Match& m : matches) distances.push_back(m.distance);
+    const DmaxUpdate update = UpdateDmax(distances, d_ref, dmax, options.histogram_bins,
+                                         options.histogram_valley_ratio);
+    dmax = update.dmax_m;
+
+    // d. Discard pairs beyond Dmax, or outside the Mahalanobis gate (§4.4); weights.
+    const Eigen::Matrix3d rotation = T.linear();
+    std::size_t kept = 0, forward = 0;
+    for (const Match& m : matches) {
+      if (!PassesGate(source, target, m, T, dmax, sampling_variance, options)) continue;
+      matches[kept++] = m;
+      if (!m.backward) ++forward;
+    }
+    matches.resize(kept);
+    const std::size_t backward = kept - forward;
+
+    weights.assign(kept, 1.0);
+    double sum_sq = 0.0;
+    for (std::size_t k = 0; k < kept; ++k) {
+      const Match& m = matches[k];
+      sum_sq += m.distance * m.distance;
+      if (options.use_uncertainty)
+        weights[k] = UncertaintyWeight(source, target, m, rotation, sampling_variance, options);
+      // Symmetric: each direction's term normalised by its own pair count.
+      if (symmetric) weights[k] /= static_cast<double>(m.backward ? backward : forward);
+    }
+
+    IterationTrace trace;
+    trace.iteration = it;
+    trace.queries = queries;
+    trace.pairs_found = distances.size();
+    trace.pairs_kept = kept;
+    trace.mean_m = update.mean_m;
+    trace.stddev_m = update.stddev_m;
+    trace.dmax_m = dmax;
+    trace.branch = update.branch;
+    trace.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
+
+    if (kept < static_cast<std::size_t>(std::max(3, options.min_pairs))) {
+      result.trace.push_back(trace);
+      result.status = RegistrationStatus::kTooFewPairs;
+      result.message = "only " + std::to_string(kept) + " pairs within Dmax = " +
+                       std::to_string(dmax) + " m at iteration " + std::to_string(it);
+      break;
+    }
+
+    // e. Least-squares motion from the ORIGINAL source points (replaces T, §4.3 step 3e).
+    Eigen::Isometry3d T_new = T;
+    bool solved = false;
+    if (options.residual == Residual::kPointToPlane) {
+      solved = PointToPlaneStep(source, target, matches, weights, &T_new);
+    } else {
+      pairs.clear();
+      for (std::size_t k = 0; k < kept; ++k)
+        pairs.push_back({source.cloud().points[matches[k].source_index],
+                         target.cloud().points[matches[k].target_index], weights[k]});
+      const MotionEstimate est = options.solver == Solver::kDualQuaternion
+                                     ? SolveMotionDualQuaternion(pairs)
+                                     : SolveMotionSvd(pairs);
+      solved = est.valid;
+      T_new = est.T_target_source;
+    }
+    if (!solved) {
+      result.trace.push_back(trace);
+      result.status = RegistrationStatus::kSolverFailed;
+      result.message = "motion solve failed at iteration " + std::to_string(it);
+      break;
+    }
+
+    // f. Stopping test.
+    trace.step_translation_m = (T_new.translation() - T.translation()).norm();
+    trace.step_rotation_deg =
+        Eigen::AngleAxisd(T_new.linear() * T.linear().transpose()).angle() * kRadToDeg;
+    result.trace.push_back(trace);
+    const bool small_step =
+        options.convergence == Convergence::kRelative
+            ? RelativeConverged(T, T_new, options.relative_tolerance, d_ref * 1e-4)
+            : trace.step_translation_m < translation_tol &&
+                  trace.step_rotation_deg < options.rotation_tolerance_deg;
+    T = T_new;
+    result.iterations = it;
+    // In the coarse stage a small step only means the subset has settled: go on to all points.
+    if (small_step && !coarse) {
+      result.status = RegistrationStatus::kConverged;
+      break;
+    }
+  }
+
+  result.converged = result.status == RegistrationStatus::kConverged;
+  result.T_target_source = T;
+  result.dmax_m = dmax;
+
+  // Final pairs at the final estimate: inliers, RMS, information.
+  matches.clear();
+  MatchDirection(source, target, T, dmax, min_abs_cos, 1, false, &matches);
+  std::size_t kept = 0;
+  double sum_sq = 0.0;
+  for (const Match& m : matches) {
+    if (!PassesGate(source, target, m, T, dmax, sampling_variance, options)) continue;
+    matches[kept++] = m;
+    sum_sq += m.distance * m.distance;
+  }
+  matches.resize(kept);
+  result.inliers = kept;
+  result.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
+  ComputeInformation(source, target, matches, T, sampling_variance, options, &result);
+  return result;
+}
+
+}  // namespace rovermap::registration

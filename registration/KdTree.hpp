@@ -1,0 +1,44 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace rovermap::registration {
+
+/// Result of a bounded closest-point query.
+struct Neighbor {
+  bool found = false;         ///< false: no point strictly within the bound ("no match")
+  std::size_t index = 0;      ///< index into the indexed points
+  double squared_distance = 0.0;  ///< [m^2]
+};
+
+/// 3-D k-d tree over a point set, the only contact with nanoflann (its 1.4/1.5 API
+/// differences stay in KdTree.cpp).
+///
+/// The points are referenced, not copied: they must outlive the tree and stay unchanged.
+class KdTree {
+ public:
+  /// Builds the tree (O(n log n)). An empty set gives a tree that never matches.
+  explicit KdTree(const std::vector<Eigen::Vector3d>& points, int leaf_size = 10);
+  ~KdTree();
+  KdTree(const KdTree&) = delete;
+  KdTree& operator=(const KdTree&) = delete;
+
+  /// Closest point strictly within `max_distance` [m] of `query` (Zhang 1994, §4.1:
+  /// the search starts with radius Dmax so whole branches are pruned).
+  /// @return found == false if no point lies within the bound.
+  Neighbor FindClosest(const Eigen::Vector3d& query, double max_distance) const;
+
+  /// The k nearest points (fewer if the set is smaller), closest first.
+  std::vector<Neighbor> FindKNearest(const Eigen::Vector3d& query, std::size_t k) const;
+
+  std::size_t size() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rovermap::registration

@@ -1,0 +1,69 @@
+#pragma once
+
+namespace rovermap::registration {
+
+/// What the points sample: orientation consistency uses tangents for curves and
+/// normals for surfaces (Zhang 1994, §4.2).
+enum class Geometry { kSurface, kCurve };
+/// Non-symmetric matches source -> target only; symmetric also target -> source.
+enum class Criterion { kNonSymmetric, kSymmetric };
+/// Closed-form motion solver for point-to-point pairs (Zhang 1994, Appendix A/B).
+enum class Solver { kSvd, kDualQuaternion };
+/// Residual minimised each iteration. Point-to-point is the paper; point-to-plane
+/// (linearised, needs target normals) slides along smooth terrain much faster.
+enum class Residual { kPointToPoint, kPointToPlane };
+/// Stopping test. kRelative is the paper's 1 % test on r and t; kAbsolute stops when
+/// the step is below fixed tolerances in metres and degrees (see ALGORITHM.md,
+/// "Known weakness").
+enum class Convergence { kRelative, kAbsolute };
+
+/// Options of the iterative point matcher. Defaults are for dense stereo / range data;
+/// every field is a config key under `registration.`.
+struct RegistrationOptions {
+  Geometry geometry = Geometry::kSurface;
+  Criterion criterion = Criterion::kNonSymmetric;
+  Solver solver = Solver::kSvd;
+  Residual residual = Residual::kPointToPlane;
+
+  /// Zhang's D: the distance at which registration counts as good [m].
+  /// 0 = derive from the data (median nearest-neighbour spacing of the target).
+  double reference_distance_m = 0.0;
+  /// Initial Dmax = dmax_initial_factor * D (the paper uses 20).
+  double dmax_initial_factor = 20.0;
+  /// Bins of the distance histogram used in the "poor registration" branch.
+  int histogram_bins = 20;
+  /// The valley after the highest peak is used only if its count is at most this
+  /// fraction of the peak's count (the paper's 60 %).
+  double histogram_valley_ratio = 0.6;
+
+  int max_iterations = 100;
+  Convergence convergence = Convergence::kAbsolute;
+  /// kRelative: ||r_new - r|| / ||r_new|| and ||t_new - t|| / ||t_new|| below this.
+  double relative_tolerance = 0.01;
+  /// kAbsolute: translation step below this [m]; 0 = D / 100.
+  double translation_tolerance_m = 0.0;
+  /// kAbsolute: rotation step below this [deg].
+  double rotation_tolerance_deg = 0.001;
+
+  /// Θ: reject pairs whose normals (surfaces) or tangents (curves) differ by more
+  /// than this angle [deg]; 0 = off. Signs are ignored (|cos|).
+  double orientation_threshold_deg = 45.0;
+  /// Neighbours used for PCA surface normals when the cloud has none [count].
+  int normal_neighbors = 10;
+
+  /// Coarse to fine: the first `coarse_iterations` use every `coarse_step`-th source point.
+  bool coarse_to_fine = false;
+  int coarse_iterations = 5;
+  int coarse_step = 10;
+
+  /// Weight pairs by 1 / tr(R Λx Rᵀ + Λy) and gate them by the squared Mahalanobis
+  /// distance instead of the Euclidean Dmax (needs per-point covariances).
+  bool use_uncertainty = false;
+  /// χ² gate on the squared Mahalanobis distance (3 dof, 95 %: 7.81).
+  double mahalanobis_gate = 7.81;
+
+  /// Fewer pairs than this after gating ends the loop with a failure status [count].
+  int min_pairs = 6;
+};
+
+}  // namespace rovermap::registration
