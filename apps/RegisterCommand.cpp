@@ -67,7 +67,7 @@ CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args) {
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
       "Exit status: 0 registered (converged or max_iterations), 1 bad input file or failed\n"
-      "registration (the JSON still says why), 2 usage or config error.");
+      "registration (the JSON still says why), 2 usage or config error.\n");
   return cmd;
 }
 
@@ -114,6 +114,7 @@ int RunRegister(const RegisterArgs& args) {
       {"status", registration::ToString(r.status)},
       {"iterations", r.iterations},
       {"inliers", r.inliers},
+      {"inlier_ratio", r.inlier_ratio},
       {"rms", r.rms_m},
       {"final_dmax", r.dmax_m},
       {"reference_distance", r.reference_distance_m},

@@ -423,6 +423,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   }
   matches.resize(kept);
   result.inliers = kept;
+  result.inlier_ratio = static_cast<double>(kept) / static_cast<double>(source.cloud().size());
   result.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
   ComputeInformation(source, target, matches, T, sampling_variance, options, &result);
   return result;

@@ -70,6 +70,7 @@ struct RegistrationResult {
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   int iterations = 0;
   std::size_t inliers = 0;          ///< pairs within the final Dmax / gate at the final T
+  double inlier_ratio = 0.0;        ///< inliers / source points: low means little overlap found
   double rms_m = 0.0;               ///< RMS distance of those pairs [m]
   double dmax_m = 0.0;              ///< final Dmax [m]
   double reference_distance_m = 0.0;  ///< D as used (given or derived) [m]

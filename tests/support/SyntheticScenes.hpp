@@ -140,19 +140,21 @@ inline ScenePair MakeCurvePair(const SceneOptions& o, const Eigen::Isometry3d& T
   return pair;
 }
 
-/// Rotation [deg] and translation [m] between two transforms.
+/// Rotation error [deg] (angle of R_a R_bᵀ) and translation error ‖t_a − t_b‖ [m].
 inline std::pair<double, double> PoseError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d d = a.inverse() * b;
   return {Eigen::AngleAxisd(d.linear()).angle() * 180.0 / M_PI, d.translation().norm()};
 }
 
-/// T perturbed by `angle_deg` about `axis` and `offset_m` along a fixed direction.
+/// T with its rotation turned by `angle_deg` about `axis` (R' = ΔR·R) and its translation
+/// moved by `offset_m` along a fixed direction (t' = t + δ): "angle and offset off".
 inline Eigen::Isometry3d Perturb(const Eigen::Isometry3d& T, double angle_deg, double offset_m,
                                  Eigen::Vector3d axis = Eigen::Vector3d(1, 2, 3)) {
-  Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
-  d.linear() = Eigen::AngleAxisd(angle_deg * M_PI / 180, axis.normalized()).toRotationMatrix();
-  d.translation() = offset_m * Eigen::Vector3d(2, -1, 1).normalized();
-  return d * T;
+  Eigen::Isometry3d out = T;
+  out.linear() = Eigen::AngleAxisd(angle_deg * M_PI / 180, axis.normalized()).toRotationMatrix() *
+                 T.linear();
+  out.translation() = T.translation() + offset_m * Eigen::Vector3d(2, -1, 1).normalized();
+  return out;
 }
 
 }  // namespace rovermap::testing

@@ -1,0 +1,434 @@
+// bench_register: rovermap's matcher against PCL and Open3D ICP on the same pairs, from the
+// same initial estimate, with the same correspondence gate. Prints one table.
+//
+//   bench_register [--runs N] [--pairs bunny|terrain|all] [--data DIR] [--threads N]
+//
+// Timing is wall clock from clouds in memory (each library's own cloud type, converted
+// beforehand) to the result: k-d trees, normals, the iterations. See bench/README.md.
+
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "io/PointCloudIo.hpp"
+#include "registration/Icp.hpp"
+#include "registration/Options.hpp"
+#include "tests/support/SyntheticScenes.hpp"
+
+#ifdef ROVERMAP_BENCH_PEERS
+#include "bench/Peers.hpp"
+#endif
+
+#ifndef ROVERMAP_DATASETS_DIR
+#define ROVERMAP_DATASETS_DIR "datasets"
+#endif
+
+namespace {
+
+namespace reg = rovermap::registration;
+using Clock = std::chrono::steady_clock;
+
+struct Args {
+  int runs = 7;
+  std::string pairs = "all";
+  std::string data_dir = ROVERMAP_DATASETS_DIR;
+  int threads = 0;  // 0 = OpenMP default
+  int max_iterations = 100;  // every method
+  double gate_factor = 0.0;  // peers' gate = gate_factor * D; 0 = rovermap's initial factor (20)
+};
+
+void Usage(std::ostream& os) {
+  os << "usage: bench_register [--runs N] [--pairs bunny|terrain|all] [--data DIR] "
+        "[--threads N] [--gate-factor F]\n"
+        "                     [--max-iterations N]\n"
+        "  --runs N      timed runs per method (default 7); the table shows the median\n"
+        "  --pairs P     which pairs: bunny (2 Stanford bunny scans), terrain (synthetic), all\n"
+        "  --data DIR    datasets directory (default " ROVERMAP_DATASETS_DIR ")\n"
+        "  --threads N   OpenMP threads for rovermap and Open3D (default: OpenMP's default)\n"
+        "  --gate-factor F  peers' max correspondence distance = F x rovermap's D (default: 20,\n"
+        "                rovermap's initial Dmax factor)\n"
+        "  --max-iterations N  iteration limit of every method (default 100)\n";
+}
+
+Args ParseArgs(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--runs") {
+      a.runs = std::stoi(value());
+      if (a.runs < 1) throw std::invalid_argument("--runs must be at least 1");
+    } else if (arg == "--pairs") {
+      a.pairs = value();
+      if (a.pairs != "bunny" && a.pairs != "terrain" && a.pairs != "all")
+        throw std::invalid_argument("--pairs must be bunny, terrain or all, not '" + a.pairs + "'");
+    } else if (arg == "--data") {
+      a.data_dir = value();
+    } else if (arg == "--threads") {
+      a.threads = std::stoi(value());
+      if (a.threads < 1) throw std::invalid_argument("--threads must be at least 1");
+    } else if (arg == "--max-iterations") {
+      a.max_iterations = std::stoi(value());
+      if (a.max_iterations < 1) throw std::invalid_argument("--max-iterations must be at least 1");
+    } else if (arg == "--gate-factor") {
+      a.gate_factor = std::stod(value());
+      if (!(a.gate_factor > 0.0)) throw std::invalid_argument("--gate-factor must be positive");
+    } else if (arg == "-h" || arg == "--help") {
+      Usage(std::cout);
+      std::exit(0);
+    } else {
+      throw std::invalid_argument("unknown argument '" + arg + "'");
+    }
+  }
+  return a;
+}
+
+struct BenchPair {
+  std::string name;
+  reg::PointCloud source, target;
+  Eigen::Isometry3d T_true = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_init = Eigen::Isometry3d::Identity();
+  std::string perturbation;
+};
+
+// Closest rotation (Frobenius) to a nearly orthonormal matrix, det +1.
+Eigen::Matrix3d Orthonormalize(const Eigen::Matrix3d& m) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d u = svd.matrixU();
+  if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) *= -1.0;
+  return u * svd.matrixV().transpose();
+}
+
+// Row of gt_pairs.txt: "source target r11 r12 r13 tx r21 ... tz ...".
+Eigen::Isometry3d ReadGroundTruth(const std::string& path, const std::string& source,
+                                  const std::string& target) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    std::string s, t;
+    ss >> s >> t;
+    if (s != source || t != target) continue;
+    Eigen::Matrix<double, 3, 4> m;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        if (!(ss >> m(r, c))) throw std::runtime_error(path + ": bad row for " + s + " " + t);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Orthonormalize(m.leftCols<3>());
+    T.translation() = m.col(3);
+    return T;
+  }
+  throw std::runtime_error(path + ": no row for " + source + " -> " + target);
+}
+
+BenchPair BunnyPair(const std::string& data_dir, const std::string& source,
+                    const std::string& target) {
+  const std::string dir = data_dir + "/stanford_bunny/";
+  BenchPair p;
+  p.name = source.substr(0, source.find('.')) + "->" + target.substr(0, target.find('.'));
+  p.source = rovermap::io::ReadPointCloud(dir + source);
+  p.target = rovermap::io::ReadPointCloud(dir + target);
+  p.T_true = ReadGroundTruth(dir + "gt_pairs.txt", source, target);
+  p.T_init = rovermap::testing::Perturb(p.T_true, 10.0, 0.005);
+  p.perturbation = "truth perturbed by 10 deg and 5 mm";
+  return p;
+}
+
+BenchPair TerrainPair() {
+  const rovermap::testing::ScenePair scene =
+      rovermap::testing::MakeTerrainPair(rovermap::testing::SceneOptions{},
+                                         rovermap::testing::RoverMotion());
+  BenchPair p;
+  p.name = "terrain";
+  p.source = scene.source;
+  p.target = scene.target;
+  p.T_true = scene.T_target_source;
+  p.T_init = rovermap::testing::Perturb(p.T_true, 2.0, 0.1);
+  p.perturbation = "rover motion perturbed by 2 deg and 0.1 m";
+  return p;
+}
+
+// One registration: estimate, time, iterations and a short status.
+struct RunResult {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  double time_ms = 0.0;
+  int iterations = -1;
+  std::string status;
+  double reference_distance_m = 0.0;  // rovermap only
+};
+
+struct Method {
+  std::string name;
+  std::function<RunResult()> run;
+  std::function<int()> count_iterations;  // for peers that do not report iterations
+};
+
+RunResult RunRovermap(const BenchPair& pair, const reg::RegistrationOptions& options) {
+  // Copies outside the timer (the peers also get their clouds ready-made), moved in.
+  reg::PointCloud source = pair.source, target = pair.target;
+  const auto t0 = Clock::now();
+  const reg::IndexedCloud s(std::move(source), options);
+  const reg::IndexedCloud t(std::move(target), options);
+  const reg::RegistrationResult r = reg::Register(s, t, pair.T_init, options);
+  const auto t1 = Clock::now();
+  RunResult out;
+  out.time_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+  out.T = r.T_target_source;
+  out.iterations = r.iterations;
+  out.status = reg::ToString(r.status);
+  out.reference_distance_m = r.reference_distance_m;
+  return out;
+}
+
+// The first three fields of /proc/loadavg: the machine is shared, so say how busy it was.
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string a, b, c;
+  if (!(in >> a >> b >> c)) return "n/a";
+  return a + " " + b + " " + c;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Row {
+  std::string pair, method;
+  double median_ms = 0, min_ms = 0, max_ms = 0;
+  double rot_deg = 0, trans_mm = 0;
+  double rot_spread_deg = 0, trans_spread_mm = 0;  // max - min over runs
+  int iterations = -1;
+  std::string status;
+  double ratio_default = 0, ratio_p2p = 0;
+};
+
+std::string Fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+std::string Pad(const std::string& s, std::size_t width, bool right) {
+  // Width in characters; the strings here are ASCII.
+  if (s.size() >= width) return s;
+  return right ? std::string(width - s.size(), ' ') + s : s + std::string(width - s.size(), ' ');
+}
+
+void PrintTable(const std::vector<Row>& rows) {
+  const std::vector<std::string> head = {"pair",         "method",    "median ms", "min-max ms",
+                                         "rot err deg",  "trans err mm", "iters", "status",
+                                         "t / t(rm)",    "t / t(rm p2p)"};
+  const std::vector<bool> right = {false, false, true, true, true, true, true, false, true, true};
+  std::vector<std::vector<std::string>> cells;
+  for (const Row& r : rows) {
+    std::string rot = Fmt("%.4f", r.rot_deg), trans = Fmt("%.3f", r.trans_mm);
+    if (r.rot_spread_deg > 1e-4 || r.trans_spread_mm > 1e-3) {  // not the same every run
+      rot += "*";
+      trans += "*";
+    }
+    cells.push_back({r.pair, r.method, Fmt("%.1f", r.median_ms),
+                     Fmt("%.1f", r.min_ms) + "-" + Fmt("%.1f", r.max_ms), rot, trans,
+                     r.iterations >= 0 ? std::to_string(r.iterations) : "?", r.status,
+                     Fmt("%.2f", r.ratio_default), Fmt("%.2f", r.ratio_p2p)});
+  }
+  std::vector<std::size_t> width(head.size());
+  for (std::size_t c = 0; c < head.size(); ++c) {
+    width[c] = head[c].size();
+    for (const auto& row : cells) width[c] = std::max(width[c], row[c].size());
+  }
+  auto line = [&](const std::vector<std::string>& v) {
+    std::string s = "|";
+    for (std::size_t c = 0; c < v.size(); ++c) s += " " + Pad(v[c], width[c], right[c]) + " |";
+    std::cout << s << "\n";
+  };
+  line(head);
+  std::string sep = "|";
+  for (std::size_t c = 0; c < head.size(); ++c)
+    sep += (right[c] ? std::string(width[c] + 1, '-') + ":" : ":" + std::string(width[c] + 1, '-')) + "|";
+  std::cout << sep << "\n";
+  for (const auto& row : cells) line(row);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args;
+  try {
+    args = ParseArgs(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_register: " << e.what() << "\n";
+    Usage(std::cerr);
+    return 2;
+  }
+  if (args.threads > 0) omp_set_num_threads(args.threads);
+
+  std::vector<BenchPair> pairs;
+  try {
+    if (args.pairs == "bunny" || args.pairs == "all") {
+      pairs.push_back(BunnyPair(args.data_dir, "bun045.ply", "bun000.ply"));
+      pairs.push_back(BunnyPair(args.data_dir, "bun315.ply", "bun000.ply"));
+    }
+    if (args.pairs == "terrain" || args.pairs == "all") pairs.push_back(TerrainPair());
+  } catch (const std::exception& e) {
+    std::cerr << "bench_register: " << e.what() << "\n";
+    return 1;
+  }
+
+  std::cout << "bench_register: " << args.runs << " timed runs per method (+1 warm-up), "
+            << "OpenMP threads " << omp_get_max_threads()
+            << " (rovermap, Open3D; PCL ICP is single-threaded)";
+#ifdef ROVERMAP_BENCH_PEERS
+  std::cout << "; PCL " << rovermap::bench::PclVersion() << ", Open3D "
+            << rovermap::bench::Open3dVersion();
+#else
+  std::cout << "; peers not built (cmake -DROVERMAP_BENCH_PEERS=ON)";
+#endif
+  std::cout << "; load average " << LoadAverage() << "\n\n";
+
+  reg::RegistrationOptions plane_options;  // defaults: point-to-plane, orientation test
+  plane_options.max_iterations = args.max_iterations;
+  reg::RegistrationOptions p2p_options = plane_options;
+  p2p_options.residual = reg::Residual::kPointToPoint;
+
+  std::vector<Row> rows;
+  for (const BenchPair& pair : pairs) {
+    // Warm-up run of rovermap: D (median spacing of the target) gives everyone's gate.
+    const RunResult warm = RunRovermap(pair, plane_options);
+    const double d_ref = warm.reference_distance_m;
+    const double gate_factor =
+        args.gate_factor > 0.0 ? args.gate_factor : plane_options.dmax_initial_factor;
+    const double gate = gate_factor * d_ref;
+    if (!(gate > 0.0)) {
+      std::cerr << "bench_register: pair " << pair.name << ": rovermap derived no reference distance ("
+                << warm.status << "), skipping the pair\n";
+      continue;
+    }
+    const auto [init_rot, init_trans] = rovermap::testing::PoseError(pair.T_true, pair.T_init);
+    std::printf(
+        "pair %-14s source %zu pts, target %zu pts; initial error %.3f deg, %.2f mm (%s); "
+        "D = %.3f mm, gate = %.0f x D = %.2f mm\n",
+        pair.name.c_str(), pair.source.size(), pair.target.size(), init_rot, init_trans * 1e3,
+        pair.perturbation.c_str(), d_ref * 1e3, gate_factor, gate * 1e3);
+
+    std::vector<Method> methods;
+    methods.push_back({"rovermap point-to-plane (default)",
+                       [&] { return RunRovermap(pair, plane_options); }, nullptr});
+    methods.push_back({"rovermap point-to-point (paper)",
+                       [&] { return RunRovermap(pair, p2p_options); }, nullptr});
+#ifdef ROVERMAP_BENCH_PEERS
+    namespace rb = rovermap::bench;
+    const rb::PeerParams params{gate, plane_options.max_iterations};
+    std::vector<std::unique_ptr<rb::PeerMethod>> peers;
+    peers.push_back(rb::MakePclIcp(pair.source.points, pair.target.points));
+    peers.push_back(rb::MakeOpen3dPointToPoint(pair.source.points, pair.target.points));
+    peers.push_back(rb::MakeOpen3dPointToPlane(pair.source.points, pair.target.points));
+    for (auto& peer : peers) {
+      rb::PeerMethod* m = peer.get();
+      methods.push_back({m->Name(),
+                         [m, &pair, params] {
+                           RunResult out;
+                           out.T = pair.T_init;
+                           try {
+                             const rb::PeerResult r = m->Run(pair.T_init, params);
+                             out.T = r.T_target_source;
+                             out.time_ms = r.time_ms;
+                             out.iterations = r.iterations;
+                             out.status = r.status;
+                           } catch (const std::exception& e) {  // Open3D throws on bad input
+                             std::cerr << m->Name() << ": " << e.what() << "\n";
+                             out.iterations = 0;
+                             out.status = "error";
+                           }
+                           return out;
+                         },
+                         [m, &pair, params] {
+                           try {
+                             return m->CountIterations(pair.T_init, params);
+                           } catch (const std::exception&) {
+                             return 0;
+                           }
+                         }});
+    }
+#endif
+
+    // Warm-up (untimed) of every method, then `runs` rounds, methods interleaved in each
+    // round so that machine noise spreads over all of them.
+    for (const Method& m : methods) m.run();
+    std::vector<std::vector<RunResult>> results(methods.size());
+    for (int r = 0; r < args.runs; ++r)
+      for (std::size_t k = 0; k < methods.size(); ++k) results[k].push_back(methods[k].run());
+
+    const std::size_t first_row = rows.size();
+    for (std::size_t k = 0; k < methods.size(); ++k) {
+      Row row;
+      row.pair = pair.name;
+      row.method = methods[k].name;
+      std::vector<double> times, rots, transs;
+      for (const RunResult& rr : results[k]) {
+        times.push_back(rr.time_ms);
+        const auto [rot, trans] = rovermap::testing::PoseError(pair.T_true, rr.T);
+        rots.push_back(rot);
+        transs.push_back(trans * 1e3);
+      }
+      row.median_ms = Median(times);
+      row.min_ms = *std::min_element(times.begin(), times.end());
+      row.max_ms = *std::max_element(times.begin(), times.end());
+      row.rot_deg = Median(rots);
+      row.trans_mm = Median(transs);
+      row.rot_spread_deg = *std::max_element(rots.begin(), rots.end()) -
+                           *std::min_element(rots.begin(), rots.end());
+      row.trans_spread_mm = *std::max_element(transs.begin(), transs.end()) -
+                            *std::min_element(transs.begin(), transs.end());
+      row.iterations = results[k].front().iterations;
+      row.status = results[k].front().status;
+      if (row.iterations < 0 && methods[k].count_iterations) {
+        row.iterations = methods[k].count_iterations();
+        if (row.status.empty())
+          row.status = row.iterations < plane_options.max_iterations ? "converged" : "max_iterations";
+      }
+      rows.push_back(row);
+    }
+    const double t_default = rows[first_row].median_ms;
+    const double t_p2p = rows[first_row + 1].median_ms;
+    for (std::size_t k = first_row; k < rows.size(); ++k) {
+      rows[k].ratio_default = rows[k].median_ms / t_default;
+      rows[k].ratio_p2p = rows[k].median_ms / t_p2p;
+    }
+  }
+
+  const double shown_factor =
+      args.gate_factor > 0.0 ? args.gate_factor : plane_options.dmax_initial_factor;
+  std::cout << "\nAll methods start from the same initial estimate. Correspondence gate: the peers "
+               "use a fixed max distance of "
+            << shown_factor
+            << " x rovermap's D (D = median point spacing of the target); rovermap starts at Dmax = "
+            << plane_options.dmax_initial_factor
+            << " x D and adapts it (Zhang 1994).\nTimes: wall clock, clouds in memory to result "
+               "(trees, normals, iterations), median of "
+            << args.runs << " runs. Errors vs ground truth (median over runs; * = varied between runs).\n"
+               "t / t(rm): median time / rovermap default's; t / t(rm p2p): / rovermap "
+               "point-to-point's (> 1: rovermap faster).\n\n";
+  PrintTable(rows);
+  std::cout << "\nload average at the end: " << LoadAverage() << "\n";
+  return 0;
+}

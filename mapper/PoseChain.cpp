@@ -1,0 +1,91 @@
+#include "mapper/PoseChain.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rovermap::mapper {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+// cos(pitch) below this is gimbal lock: cos(±π/2) in doubles is ~6e-17.
+constexpr double kGimbalCos = 1e-12;
+
+}  // namespace
+
+Eigen::Matrix3d RotationFromEulerRpy(const Eigen::Vector3d& rpy_rad) {
+  return (Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Vector3d EulerRpyFromRotation(const Eigen::Matrix3d& R) {
+  // R = Rz(y)·Ry(p)·Rx(r): first column (cy·cp, sy·cp, −sp).
+  const double cos_pitch = std::hypot(R(0, 0), R(1, 0));
+  const double pitch = std::atan2(-R(2, 0), cos_pitch);
+  if (cos_pitch < kGimbalCos) {
+    // Rows 0-1 of column 1 are (−sin(y ∓ r), cos(y ∓ r)) at pitch ±π/2; take roll = 0.
+    return {0.0, pitch, std::atan2(-R(0, 1), R(1, 1))};
+  }
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  // Roll from Rz(yaw)ᵀ·R = Ry(p)·Rx(r), whose (1,1), (1,2) are (cos r, −sin r): consistent with
+  // the yaw just taken, so the angles rebuild R accurately even close to gimbal lock.
+  const double cy = std::cos(yaw), sy = std::sin(yaw);
+  const double m11 = -sy * R(0, 1) + cy * R(1, 1);
+  const double m12 = -sy * R(0, 2) + cy * R(1, 2);
+  return {std::atan2(-m12, m11), pitch, yaw};
+}
+
+TransformComponents CorrectionComponents(const Eigen::Isometry3d& T) {
+  const Eigen::Vector3d rpy = EulerRpyFromRotation(T.linear()) * kRadToDeg;
+  const Eigen::Vector3d t = T.translation();
+  return {t.x(), t.y(), t.z(), rpy.x(), rpy.y(), rpy.z()};
+}
+
+bool IsFiniteRigid(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d R = T.linear();
+  if (!R.allFinite() || !T.translation().allFinite()) return false;
+  const double orthogonality =
+      (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  return orthogonality <= 1e-6 && R.determinant() > 0.0;
+}
+
+PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
+  if (!IsFiniteRigid(T_world_body0_odom)) {
+    throw std::invalid_argument("PoseChain: frame 0 odometry pose is not a finite rigid transform");
+  }
+  ChainStep first;
+  first.T_world_body = T_world_body0_odom;
+  first.T_world_body_odom = T_world_body0_odom;
+  steps_.push_back(first);
+}
+
+Eigen::Isometry3d PoseChain::PredictIncrement(const Eigen::Isometry3d& T_world_body_odom) const {
+  return steps_.back().T_world_body_odom.inverse() * T_world_body_odom;
+}
+
+ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
+                         const std::optional<Eigen::Isometry3d>& T_prev_curr_registered) {
+  if (!IsFiniteRigid(T_world_body_odom)) {
+    throw std::invalid_argument("PoseChain: frame " + std::to_string(steps_.size()) +
+                                " odometry pose is not a finite rigid transform");
+  }
+  const ChainStep& prev = steps_.back();
+  ChainStep step;
+  step.index = steps_.size();
+  step.T_world_body_odom = T_world_body_odom;
+  step.odom_increment = PredictIncrement(T_world_body_odom);
+  step.fallback = !T_prev_curr_registered || !IsFiniteRigid(*T_prev_curr_registered);
+  step.used_increment = step.fallback ? step.odom_increment : *T_prev_curr_registered;
+  step.T_world_body = prev.T_world_body * step.used_increment;
+  step.increment_correction = step.odom_increment.inverse() * step.used_increment;
+  step.cumulative_correction = T_world_body_odom.inverse() * step.T_world_body;
+
+  path_length_m_ += step.used_increment.translation().norm();
+  if (step.fallback) ++fallbacks_;
+  steps_.push_back(step);
+  return step;
+}
+
+}  // namespace rovermap::mapper

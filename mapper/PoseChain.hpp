@@ -1,0 +1,102 @@
+#pragma once
+// Chaining of frame-to-frame increments into world poses, and the per-frame correction of
+// dead reckoning that drift.csv reports (DESIGN §6).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+namespace rovermap::mapper {
+
+/// Rotation from roll, pitch, yaw [rad]: R = Rz(yaw)·Ry(pitch)·Rx(roll), the convention of
+/// sequence.yaml (DESIGN §4). Never fails; non-finite angles give a non-finite matrix.
+Eigen::Matrix3d RotationFromEulerRpy(const Eigen::Vector3d& rpy_rad);
+
+/// Roll, pitch, yaw [rad] with R = Rz(yaw)·Ry(pitch)·Rx(roll); roll and yaw in [−π, π], pitch
+/// in [−π/2, π/2]. Inverse of RotationFromEulerRpy for |pitch| < π/2 (angles taken modulo 2π).
+/// Gimbal lock (|pitch| = π/2, cos(pitch) < 1e-12): only yaw − roll (pitch = +π/2) or
+/// yaw + roll (pitch = −π/2) is defined, so roll is returned as 0 and yaw carries that
+/// combination; RotationFromEulerRpy of the result still gives R back.
+/// `R` must be a rotation; a non-finite R gives non-finite angles.
+Eigen::Vector3d EulerRpyFromRotation(const Eigen::Matrix3d& R);
+
+/// A transform as drift.csv writes it.
+struct TransformComponents {
+  double dx_m = 0.0;
+  double dy_m = 0.0;
+  double dz_m = 0.0;
+  double droll_deg = 0.0;  ///< R = Rz(dyaw)·Ry(dpitch)·Rx(droll), see EulerRpyFromRotation
+  double dpitch_deg = 0.0;
+  double dyaw_deg = 0.0;
+};
+
+/// Translation [m] and roll, pitch, yaw [deg] of `T`. Never fails; see EulerRpyFromRotation for
+/// the gimbal-lock case.
+TransformComponents CorrectionComponents(const Eigen::Isometry3d& T);
+
+/// True if `T` is finite and its linear part a proper rotation (‖RᵀR − I‖∞ <= 1e-6, det R > 0).
+bool IsFiniteRigid(const Eigen::Isometry3d& T);
+
+/// One frame of the chain. The increments are T_{body k−1}_{body k}: they map points of
+/// frame k into frame k−1 (registration of frame k onto frame k−1).
+struct ChainStep {
+  /// Frame index, 0 = first.
+  std::size_t index = 0;
+  /// The chained pose of frame k.
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  /// The dead-reckoning pose of frame k, as given to Add.
+  Eigen::Isometry3d T_world_body_odom = Eigen::Isometry3d::Identity();
+  /// T_prev_curr by dead reckoning: T_world_body_odom(k−1)⁻¹ · T_world_body_odom(k).
+  Eigen::Isometry3d odom_increment = Eigen::Isometry3d::Identity();
+  /// T_prev_curr chained: the registered increment, or odom_increment on fallback.
+  Eigen::Isometry3d used_increment = Eigen::Isometry3d::Identity();
+  /// odom_increment⁻¹ · used_increment: what registration changed in this step, expressed in
+  /// the body frame dead reckoning predicted for frame k.
+  Eigen::Isometry3d increment_correction = Eigen::Isometry3d::Identity();
+  /// T_world_body_odom⁻¹ · T_world_body: the chained pose in the current odometry body frame,
+  /// i.e. the total correction of dead reckoning so far.
+  Eigen::Isometry3d cumulative_correction = Eigen::Isometry3d::Identity();
+  /// Dead reckoning was used for this step (no registered increment, or it was not a finite
+  /// rigid transform). Frame 0 is never a fallback.
+  bool fallback = false;
+};
+
+/// Chains increments from the first dead-reckoning pose. The chain starts where dead
+/// reckoning starts (frame 0: zero correction), so registration only corrects the motion.
+class PoseChain {
+ public:
+  /// Starts the chain at frame 0 with T_world_body = `T_world_body0_odom`.
+  /// @throw std::invalid_argument if `T_world_body0_odom` is not IsFiniteRigid.
+  explicit PoseChain(const Eigen::Isometry3d& T_world_body0_odom);
+
+  /// Dead-reckoning increment from the last frame to a frame at `T_world_body_odom`: the
+  /// registration seed T_prev_curr. Never fails (non-finite input gives non-finite output).
+  Eigen::Isometry3d PredictIncrement(const Eigen::Isometry3d& T_world_body_odom) const;
+
+  /// Appends the next frame: T_world_body(k) = T_world_body(k−1) · used increment, where the
+  /// used increment is `T_prev_curr_registered`, or the dead-reckoning increment (flagged
+  /// `fallback`) when it is nullopt or not IsFiniteRigid.
+  /// @return the new step (also kept in steps()).
+  /// @throw std::invalid_argument if `T_world_body_odom` is not IsFiniteRigid; the chain is
+  ///        then unchanged.
+  ChainStep Add(const Eigen::Isometry3d& T_world_body_odom,
+                const std::optional<Eigen::Isometry3d>& T_prev_curr_registered);
+
+  /// Every step so far, frame 0 first; never empty.
+  const std::vector<ChainStep>& steps() const { return steps_; }
+  const ChainStep& back() const { return steps_.back(); }
+  std::size_t size() const { return steps_.size(); }
+  /// Steps that used dead reckoning [count].
+  std::size_t fallbacks() const { return fallbacks_; }
+  /// Travelled distance: Σ ‖translation of used_increment‖ over the steps [m].
+  double path_length_m() const { return path_length_m_; }
+
+ private:
+  std::vector<ChainStep> steps_;
+  std::size_t fallbacks_ = 0;
+  double path_length_m_ = 0.0;
+};
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,283 @@
+// The matcher on synthetic curves and surfaces with known motion, Gaussian noise,
+// 10–20 % outliers and partial overlap; each option shows its documented effect.
+//
+// Tolerances: the terrain patches are 8 m × 6 m sampled every 6 cm with σ = 5 mm noise and
+// 15 % outliers. Point-to-plane lands within 0.1° and 1 cm — 0.1° is 1.4 cm at the far
+// edge of the patch, 1 cm is a sixth of the sample spacing; the measured errors are 3–4×
+// smaller (see the closing note of issue 2). The paper's point-to-point residual cannot
+// see motion along a smooth surface below the sample spacing, so on terrain it is only
+// asked to reduce the initial error; on curves (1 cm samples, 3 mm noise) it must land
+// within 0.2° and 2 mm (measured 0.05° and 0.8 mm).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+
+#include "registration/Icp.hpp"
+#include "tests/support/SyntheticScenes.hpp"
+
+using namespace rovermap::registration;
+using rovermap::testing::MakeCurvePair;
+using rovermap::testing::MakeTerrainPair;
+using rovermap::testing::Perturb;
+using rovermap::testing::PoseError;
+using rovermap::testing::ScenePair;
+using rovermap::testing::SceneOptions;
+
+namespace {
+
+SceneOptions Terrain(unsigned seed) {
+  SceneOptions o;
+  o.spacing_m = 0.06;
+  o.seed = seed;
+  return o;
+}
+
+Eigen::Isometry3d CurveMotion() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 0.3, 1).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(0.2, -0.1, 0.05);
+  return T;
+}
+
+ScenePair Curves(unsigned seed) {
+  SceneOptions o;
+  o.spacing_m = 0.01;
+  o.noise_m = 0.003;
+  o.outlier_fraction = 0.10;
+  o.seed = seed;
+  return MakeCurvePair(o, CurveMotion());
+}
+
+RegistrationOptions CurveOptions() {
+  RegistrationOptions o;
+  o.geometry = Geometry::kCurve;
+  o.residual = Residual::kPointToPoint;
+  o.orientation_threshold_deg = 0.0;
+  return o;
+}
+
+std::size_t TotalQueries(const RegistrationResult& r) {
+  std::size_t q = 0;
+  for (const auto& it : r.trace) q += it.queries;
+  return q;
+}
+
+}  // namespace
+
+TEST(Icp, TerrainRecoveredWithDefaults) {
+  for (unsigned seed : {1u, 2u}) {
+    const ScenePair p = MakeTerrainPair(Terrain(seed));
+    const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+    const RegistrationResult r = Register(p.source, p.target, init, RegistrationOptions{});
+    const auto [rot, trans] = PoseError(r.T_target_source, p.T_target_source);
+    EXPECT_TRUE(r.converged) << ToString(r.status);
+    EXPECT_LT(rot, 0.1) << "seed " << seed;
+    EXPECT_LT(trans, 0.01) << "seed " << seed;
+    // D derived from the data: the median spacing of a 6 cm grid seen at a slant.
+    EXPECT_GT(r.reference_distance_m, 0.04);
+    EXPECT_LT(r.reference_distance_m, 0.07);
+    EXPECT_GT(r.inliers, p.source.size() / 2);
+  }
+}
+
+TEST(Icp, PaperPointToPointOnCurves) {
+  for (Solver solver : {Solver::kSvd, Solver::kDualQuaternion}) {
+    const ScenePair p = Curves(1);
+    RegistrationOptions o = CurveOptions();
+    o.solver = solver;
+    const RegistrationResult r = Register(p.source, p.target, Perturb(p.T_target_source, 5.0, 0.05), o);
+    const auto [rot, trans] = PoseError(r.T_target_source, p.T_target_source);
+    EXPECT_TRUE(r.converged);
+    EXPECT_LT(rot, 0.2);
+    EXPECT_LT(trans, 0.002);
+  }
+}
+
+// Tangent consistency on curves (Θ = 60°, the paper's value for finite-difference tangents).
+TEST(Icp, CurvesWithTangentTest) {
+  const ScenePair p = Curves(2);
+  RegistrationOptions o = CurveOptions();
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 5.0, 0.05);
+  const RegistrationResult plain = Register(p.source, p.target, init, o);
+  o.orientation_threshold_deg = 60.0;
+  const RegistrationResult checked = Register(p.source, p.target, init, o);
+  const auto [rot, trans] = PoseError(checked.T_target_source, p.T_target_source);
+  EXPECT_LT(rot, 0.2);
+  EXPECT_LT(trans, 0.002);
+  // Outliers break the tangents of their chain neighbours: those pairs are rejected.
+  EXPECT_LT(checked.inliers, plain.inliers);
+}
+
+TEST(Icp, SolversGiveTheSameRegistration) {
+  const ScenePair p = MakeTerrainPair(Terrain(3));
+  RegistrationOptions o;
+  o.residual = Residual::kPointToPoint;
+  o.max_iterations = 30;
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+  o.solver = Solver::kSvd;
+  const RegistrationResult a = Register(p.source, p.target, init, o);
+  o.solver = Solver::kDualQuaternion;
+  const RegistrationResult b = Register(p.source, p.target, init, o);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_TRUE(a.T_target_source.isApprox(b.T_target_source, 1e-8));
+}
+
+TEST(Icp, PointToPointReducesTerrainErrorAndDmaxNeverIncreases) {
+  const ScenePair p = MakeTerrainPair(Terrain(4));
+  RegistrationOptions o;
+  o.residual = Residual::kPointToPoint;
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+  const RegistrationResult r = Register(p.source, p.target, init, o);
+  const auto [rot0, trans0] = PoseError(init, p.T_target_source);
+  const auto [rot, trans] = PoseError(r.T_target_source, p.T_target_source);
+  // Point-to-point slides slowly along smooth terrain and stops at a fixed point of the
+  // nearest-sample pairing (measured 1.28° from 2°, 8.3 cm from 8.7 cm): it only improves.
+  EXPECT_LT(rot, 0.75 * rot0);
+  EXPECT_LT(trans, trans0);
+  ASSERT_FALSE(r.trace.empty());
+  EXPECT_DOUBLE_EQ(r.trace.front().dmax_m <= 20.0 * r.reference_distance_m, true);
+  for (std::size_t k = 1; k < r.trace.size(); ++k)
+    EXPECT_LE(r.trace[k].dmax_m, r.trace[k - 1].dmax_m) << "iteration " << k + 1;
+}
+
+// ALGORITHM.md, "Known weakness": the paper's 1 % relative test stops point-to-point
+// after a handful of iterations far from the optimum; the default absolute test goes on.
+TEST(Icp, RelativeStoppingTestStopsEarly) {
+  const ScenePair p = MakeTerrainPair(Terrain(5));
+  RegistrationOptions o;
+  o.residual = Residual::kPointToPoint;
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+  const RegistrationResult absolute = Register(p.source, p.target, init, o);
+  o.convergence = Convergence::kRelative;
+  const RegistrationResult relative = Register(p.source, p.target, init, o);
+  EXPECT_TRUE(relative.converged);
+  EXPECT_LE(relative.iterations, 10);
+  EXPECT_GT(absolute.iterations, 3 * relative.iterations);
+  EXPECT_LT(PoseError(absolute.T_target_source, p.T_target_source).first,
+            PoseError(relative.T_target_source, p.T_target_source).first);
+}
+
+// Orientation consistency (§4.2) removes false pairs: fewer iterations to converge.
+TEST(Icp, OrientationTestSpeedsConvergence) {
+  int iterations_off = 0, iterations_on = 0;
+  double error_off = 0.0, error_on = 0.0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const ScenePair p = MakeTerrainPair(Terrain(seed));
+    const Eigen::Isometry3d init = Perturb(p.T_target_source, 5.0, 0.10);
+    RegistrationOptions o;
+    o.orientation_threshold_deg = 0.0;
+    const RegistrationResult off = Register(p.source, p.target, init, o);
+    o.orientation_threshold_deg = 30.0;
+    const RegistrationResult on = Register(p.source, p.target, init, o);
+    iterations_off += off.iterations;
+    iterations_on += on.iterations;
+    error_off += PoseError(off.T_target_source, p.T_target_source).first;
+    error_on += PoseError(on.T_target_source, p.T_target_source).first;
+    EXPECT_LT(on.trace.front().pairs_found, off.trace.front().pairs_found);
+  }
+  EXPECT_LT(iterations_on, iterations_off);
+  EXPECT_LT(error_on, error_off + 0.03);
+}
+
+// Coarse to fine (§4.5): the same accuracy for fewer closest-point queries.
+TEST(Icp, CoarseToFineSavesQueries) {
+  const ScenePair p = MakeTerrainPair(Terrain(6));
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+  RegistrationOptions o;
+  const RegistrationResult fine = Register(p.source, p.target, init, o);
+  o.coarse_to_fine = true;
+  const RegistrationResult c2f = Register(p.source, p.target, init, o);
+  EXPECT_LT(TotalQueries(c2f), 0.8 * TotalQueries(fine));
+  EXPECT_EQ(c2f.trace.front().queries, (p.source.size() + 9) / 10);
+  const auto [rot, trans] = PoseError(c2f.T_target_source, p.T_target_source);
+  EXPECT_LT(rot, 0.1);
+  EXPECT_LT(trans, 0.01);
+}
+
+// Symmetric criterion (§4.6): more accurate under noise, about twice the queries.
+TEST(Icp, SymmetricCriterionIsMoreAccurate) {
+  double error_ns = 0.0, error_s = 0.0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    SceneOptions so = Terrain(seed);
+    so.noise_m = 0.01;
+    const ScenePair p = MakeTerrainPair(so);
+    const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+    RegistrationOptions o;
+    const RegistrationResult ns = Register(p.source, p.target, init, o);
+    o.criterion = Criterion::kSymmetric;
+    const RegistrationResult s = Register(p.source, p.target, init, o);
+    error_ns += PoseError(ns.T_target_source, p.T_target_source).second;
+    error_s += PoseError(s.T_target_source, p.T_target_source).second;
+    EXPECT_GT(s.trace.front().queries, 1.9 * ns.trace.front().queries);
+  }
+  EXPECT_LT(error_s, error_ns);
+}
+
+// Uncertainty (§4.4): with range-dependent (stereo-like) noise, covariance weighting and
+// the Mahalanobis gate beat the unweighted point-to-point estimate (measured: rotation
+// error 5–18× smaller). With point-to-plane residuals the effect is within the noise of
+// this scene (see the closing note of issue 2), so it is not asserted here.
+TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
+  double error_plain = 0.0, error_weighted = 0.0;
+  for (unsigned seed : {1u, 2u}) {
+    SceneOptions so = Terrain(seed);
+    so.range_noise = true;
+    so.noise_m = 0.01;
+    const ScenePair p = MakeTerrainPair(so);
+    const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+    RegistrationOptions o;
+    o.residual = Residual::kPointToPoint;
+    const RegistrationResult plain = Register(p.source, p.target, init, o);
+    o.use_uncertainty = true;
+    const RegistrationResult weighted = Register(p.source, p.target, init, o);
+    error_plain += PoseError(plain.T_target_source, p.T_target_source).first;
+    error_weighted += PoseError(weighted.T_target_source, p.T_target_source).first;
+    // The gate works on covariances, not on Dmax: it keeps a different pair set.
+    EXPECT_NE(weighted.inliers, plain.inliers);
+  }
+  EXPECT_LT(error_weighted, 0.33 * error_plain);
+}
+
+TEST(Icp, CovarianceIsSymmetricPositiveDefiniteAndFlagsAPlane) {
+  const ScenePair p = MakeTerrainPair(Terrain(7));
+  const RegistrationResult r =
+      Register(p.source, p.target, Perturb(p.T_target_source, 1.0, 0.05), RegistrationOptions{});
+  EXPECT_TRUE(r.covariance.isApprox(r.covariance.transpose(), 1e-9));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(r.covariance);
+  EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
+  // The estimate's standard deviations are small against the achieved accuracy bound.
+  EXPECT_LT(std::sqrt(r.covariance(3, 3)), 0.01);
+
+  // A flat plane does not constrain sliding in it: conditioning collapses.
+  rovermap::registration::PointCloud plane;
+  for (double x = 0; x < 2; x += 0.05)
+    for (double y = 0; y < 2; y += 0.05) plane.points.emplace_back(x, y, 0.0);
+  const RegistrationResult flat = Register(plane, plane, Eigen::Isometry3d::Identity(), RegistrationOptions{});
+  EXPECT_LT(flat.conditioning, 1e-6);
+  EXPECT_GT(r.conditioning, 1e-4);
+}
+
+TEST(Icp, StatusReportsFailures) {
+  PointCloud two;
+  two.points = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  const ScenePair p = MakeTerrainPair(Terrain(8));
+  const RegistrationResult few = Register(two, p.target, Eigen::Isometry3d::Identity(), RegistrationOptions{});
+  EXPECT_EQ(few.status, RegistrationStatus::kTooFewPoints);
+  EXPECT_FALSE(few.converged);
+  EXPECT_FALSE(few.message.empty());
+
+  // Initial estimate 50 m away: nothing within Dmax.
+  Eigen::Isometry3d far = p.T_target_source;
+  far.translation() += Eigen::Vector3d(50, 0, 0);
+  const RegistrationResult none = Register(p.source, p.target, far, RegistrationOptions{});
+  EXPECT_EQ(none.status, RegistrationStatus::kTooFewPairs);
+  EXPECT_TRUE(none.T_target_source.isApprox(far));
+
+  PointCloud no_cov = p.source;
+  no_cov.covariances.clear();
+  RegistrationOptions o;
+  o.use_uncertainty = true;
+  EXPECT_EQ(Register(no_cov, p.target, p.T_target_source, o).status,
+            RegistrationStatus::kInvalidInput);
+}

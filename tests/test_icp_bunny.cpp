@@ -1,0 +1,125 @@
+// Real data: Stanford bunny range scans (datasets/stanford_bunny) against the reference
+// alignment in gt_pairs.txt. From 10° and 5 mm off the reference, bun045 → bun000 must
+// land within 0.2° and 0.5 mm (the scanner's ~0.3–0.6 mm residual is the reference's own
+// accuracy, so tighter bounds would test the reference, not the matcher).
+#include <gtest/gtest.h>
+
+#include <Eigen/SVD>
+#include <fstream>
+#include <sstream>
+
+#include "io/PointCloudIo.hpp"
+#include "registration/Icp.hpp"
+#include "tests/support/SyntheticScenes.hpp"
+
+using namespace rovermap::registration;
+using rovermap::testing::Perturb;
+using rovermap::testing::PoseError;
+
+namespace {
+
+const std::string kDir = std::string(ROVERMAP_DATASETS_DIR) + "/stanford_bunny/";
+
+// T_target_source of a pair from gt_pairs.txt, rotation re-orthonormalised (9 digits).
+Eigen::Isometry3d GroundTruth(const std::string& source, const std::string& target) {
+  std::ifstream in(kDir + "gt_pairs.txt");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream row(line);
+    std::string s, t;
+    row >> s >> t;
+    if (s != source || t != target) continue;
+    Eigen::Matrix<double, 3, 4> m;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) row >> m(r, c);
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.leftCols<3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = svd.matrixU() * svd.matrixV().transpose();
+    T.translation() = m.col(3);
+    return T;
+  }
+  ADD_FAILURE() << "pair " << source << " -> " << target << " not in gt_pairs.txt";
+  return Eigen::Isometry3d::Identity();
+}
+
+class Bunny : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    bun000_ = new PointCloud(rovermap::io::ReadPointCloud(kDir + "bun000.ply"));
+    bun045_ = new PointCloud(rovermap::io::ReadPointCloud(kDir + "bun045.ply"));
+    bun315_ = new PointCloud(rovermap::io::ReadPointCloud(kDir + "bun315.ply"));
+  }
+  static void TearDownTestSuite() {
+    delete bun000_;
+    delete bun045_;
+    delete bun315_;
+  }
+  static PointCloud* bun000_;
+  static PointCloud* bun045_;
+  static PointCloud* bun315_;
+};
+PointCloud* Bunny::bun000_ = nullptr;
+PointCloud* Bunny::bun045_ = nullptr;
+PointCloud* Bunny::bun315_ = nullptr;
+
+}  // namespace
+
+TEST_F(Bunny, Bun045ToBun000From10DegreesAnd5mmOff) {
+  const Eigen::Isometry3d truth = GroundTruth("bun045.ply", "bun000.ply");
+  const RegistrationOptions options;
+  const IndexedCloud source(*bun045_, options), target(*bun000_, options);
+  for (const Eigen::Vector3d& axis : {Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(0, 1, 0),
+                                      Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(-2, 1, 1)}) {
+    const Eigen::Isometry3d init = Perturb(truth, 10.0, 0.005, axis);
+    const auto [rot0, trans0] = PoseError(init, truth);
+    ASSERT_NEAR(rot0, 10.0, 1e-6);
+    const RegistrationResult r = Register(source, target, init, options);
+    const auto [rot, trans] = PoseError(r.T_target_source, truth);
+    EXPECT_TRUE(r.converged) << ToString(r.status);
+    EXPECT_LT(rot, 0.2) << "axis " << axis.transpose();
+    EXPECT_LT(trans, 0.0005) << "axis " << axis.transpose();
+    // The residual sits at the scanner's sample spacing (median NN 0.33 mm at the reference).
+    EXPECT_LT(r.rms_m, 0.0006);
+  }
+}
+
+// The paper's own formulation (point-to-point, SVD, no orientation test) gets there too,
+// only more slowly (ALGORITHM.md, "Known weakness": measured 125–480 iterations).
+TEST_F(Bunny, PaperPointToPointAlsoConverges) {
+  const Eigen::Isometry3d truth = GroundTruth("bun045.ply", "bun000.ply");
+  RegistrationOptions options;
+  options.residual = Residual::kPointToPoint;
+  options.orientation_threshold_deg = 0.0;
+  options.max_iterations = 600;
+  const RegistrationResult r =
+      Register(*bun045_, *bun000_, Perturb(truth, 10.0, 0.005, Eigen::Vector3d(-2, 1, 1)), options);
+  const auto [rot, trans] = PoseError(r.T_target_source, truth);
+  EXPECT_TRUE(r.converged) << ToString(r.status);
+  EXPECT_LT(rot, 0.2);
+  EXPECT_LT(trans, 0.0005);
+}
+
+TEST_F(Bunny, Bun315ToBun000) {
+  const Eigen::Isometry3d truth = GroundTruth("bun315.ply", "bun000.ply");
+  const RegistrationResult r = Register(*bun315_, *bun000_, Perturb(truth, 10.0, 0.005),
+                                        RegistrationOptions{});
+  const auto [rot, trans] = PoseError(r.T_target_source, truth);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(rot, 0.3);
+  EXPECT_LT(trans, 0.001);
+}
+
+// 34° apart from identity: beyond the paper's stated ~20° basin (initial Dmax = 20 D is
+// 10 mm here); the matcher must say it did not get there rather than claim success.
+TEST_F(Bunny, FromIdentityIsOutsideTheBasin) {
+  const Eigen::Isometry3d truth = GroundTruth("bun045.ply", "bun000.ply");
+  const RegistrationResult r =
+      Register(*bun045_, *bun000_, Eigen::Isometry3d::Identity(), RegistrationOptions{});
+  const auto [rot, trans] = PoseError(r.T_target_source, truth);
+  // Measured: it stays near identity with 5 % of the points paired. The RMS of those
+  // pairs looks fine (0.54 mm); the inlier ratio is what gives it away.
+  EXPECT_GT(rot, 1.0);
+  EXPECT_FALSE(r.converged);
+  EXPECT_LT(r.inlier_ratio, 0.2);
+}
