@@ -22,7 +22,8 @@ struct RegisterArgs {
   ConfigArgs config;
   std::string source;
   std::string target;
-  std::string init;  ///< "rx ry rz tx ty tz" (rad, m)
+  std::string init;     ///< "rx ry rz tx ty tz" (rad, m)
+  std::string preview;  ///< PNG of the alignment before and after (optional)
 };
 CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.

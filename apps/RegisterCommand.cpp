@@ -8,6 +8,7 @@
 #include "config/Config.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/RegistrationPreview.hpp"
 #include "registration/Icp.hpp"
 
 namespace rovermap::apps {
@@ -64,6 +65,8 @@ CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args) {
   cmd->add_option("TARGET", args->target, "Target points (.xyz or .ply)")->required();
   cmd->add_option("--init", args->init,
                   "Initial T_target_source as \"rx ry rz tx ty tz\" (rotation vector rad, m)");
+  cmd->add_option("--preview", args->preview,
+                  "Also write a PNG of the alignment before and after (top view of both clouds)");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
       "Exit status: 0 registered (converged or max_iterations), 1 bad input file or failed\n"
@@ -126,6 +129,15 @@ int RunRegister(const RegisterArgs& args) {
       {"load_ms", load_ms},
       {"trace", trace}};
   if (!r.message.empty()) out["message"] = r.message;
+  if (!args.preview.empty()) {
+    io::PreviewOptions preview;
+    preview.title = std::filesystem::path(args.source).filename().string() + " -> " +
+                    std::filesystem::path(args.target).filename().string() + ": " +
+                    registration::ToString(r.status);
+    io::WriteRegistrationPreview(args.preview, source_index.cloud(), target_index.cloud(), T_init,
+                                 r.T_target_source, preview);
+    out["preview"] = args.preview;
+  }
   std::cout << out.dump(2) << "\n";
 
   const bool usable = r.status == registration::RegistrationStatus::kConverged ||

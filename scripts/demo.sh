@@ -12,7 +12,8 @@ mkdir -p "$out"
 # turned 10° about (1,2,3), translation moved 5 mm.
 init="-0.007382 0.689405 0.158762 -0.047939 -0.002425 -0.008881"
 result="$out/register_bun045_bun000.json"
-"$bin" register "$data/bun045.ply" "$data/bun000.ply" --init "$init" > "$result.tmp"
+"$bin" register "$data/bun045.ply" "$data/bun000.ply" --init "$init" \
+  --preview "$out/register_bun045_bun000.png" > "$result.tmp"
 mv "$result.tmp" "$result"
 
 python3 - "$result" <<'PY' 2>/dev/null || cat "$result"
@@ -35,3 +36,4 @@ print(f"  error against the reference alignment: {err_deg:.3f} deg, {err_mm:.3f}
       f"(started 10 deg / 5 mm off)")
 PY
 echo "  full result (JSON): $result"
+echo "  picture of the alignment before and after: $out/register_bun045_bun000.png"

@@ -69,8 +69,9 @@ const std::string kBunny = std::string(ROVERMAP_DATASETS_DIR) + "/stanford_bunny
 
 TEST_F(RegisterCommand, BunnyPairPrintsTheJsonContract) {
   // Reference bun045 -> bun000 is a 34.3° rotation about y: start 5° and 3 mm off it.
+  const std::string png = (dir_ / "preview.png").string();
   const CommandResult r = Rovermap("register " + kBunny + "bun045.ply " + kBunny +
-                         "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\"");
+                         "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" --preview " + png);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   for (const char* key : {"matrix", "rotation_vector", "translation", "converged", "iterations",
@@ -84,6 +85,20 @@ TEST_F(RegisterCommand, BunnyPairPrintsTheJsonContract) {
   EXPECT_NEAR(j["translation"][0].get<double>(), -0.0520211, 5e-4);
   EXPECT_NEAR(j["translation"][2].get<double>(), -0.0109223, 5e-4);
   EXPECT_EQ(j["covariance"].size(), 6u);
+  // The preview is a real PNG (signature), written atomically (no temporary left behind).
+  const std::string bytes = Slurp(png);
+  ASSERT_GT(bytes.size(), 1000u);
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST_F(RegisterCommand, UnwritablePreviewIsNamed) {
+  const std::string good = GoodXyz();
+  const CommandResult r = Rovermap("register " + good + " " + good + " --preview " +
+                                   (dir_ / "no_such_dir" / "p.png").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("p.png"), std::string::npos) << r.err;
 }
 
 TEST_F(RegisterCommand, CurvesFromXyzChains) {
