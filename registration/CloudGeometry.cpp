@@ -22,7 +22,8 @@ std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>&
       const Eigen::Vector3d d = points[nb.index] - mean;
       cov += d * d.transpose();
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);  // closed form for 3×3: several times faster than the iterative one
     // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
     if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) continue;
     normals[i] = eig.eigenvectors().col(0).normalized();

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "registration/CloudGeometry.hpp"
 #include "registration/MotionSolver.hpp"
@@ -28,9 +29,12 @@ struct Match {
 
 // Closest points of every `step`-th point of `from`, mapped by T_to_from, in `to`,
 // within `dmax` and passing the orientation test (Zhang 1994, §4.1 and §4.2).
+// `hints` holds, per point of `from`, its previous closest point in `to` (warm start for the
+// bounded search, updated here); the result does not depend on it.
 void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
                     const Eigen::Isometry3d& T_to_from, double dmax, double min_abs_cos,
-                    std::size_t step, bool backward, std::vector<Match>* out) {
+                    std::size_t step, bool backward, std::vector<std::size_t>* hints,
+                    std::vector<Match>* out) {
   const auto& pts = from.cloud().points;
   const long queries = static_cast<long>((pts.size() + step - 1) / step);
   std::vector<Match> local(static_cast<std::size_t>(queries));
@@ -40,8 +44,9 @@ void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
 #pragma omp parallel for schedule(dynamic, 512)
   for (long q = 0; q < queries; ++q) {
     const std::size_t i = static_cast<std::size_t>(q) * step;
-    const Neighbor nb = to.tree().FindClosest(T_to_from * pts[i], dmax);
+    const Neighbor nb = to.tree().FindClosest(T_to_from * pts[i], dmax, (*hints)[i]);
     if (!nb.found) continue;
+    (*hints)[i] = nb.index;
     if (check_orientation) {
       const Eigen::Vector3d& a = from.orientations()[i];
       const Eigen::Vector3d& b = to.orientations()[nb.index];
@@ -299,6 +304,9 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
       options.translation_tolerance_m > 0.0 ? options.translation_tolerance_m : d_ref / 100.0;
 
   Eigen::Isometry3d T = T_init;
+  constexpr std::size_t kNoHint = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> forward_hints(source.cloud().size(), kNoHint);
+  std::vector<std::size_t> backward_hints(symmetric ? target.cloud().size() : 0, kNoHint);
   std::vector<Match> matches;
   std::vector<double> distances, weights;
   std::vector<WeightedPair> pairs;
@@ -310,10 +318,11 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
     // a. Closest points within Dmax, both ways for the symmetric criterion.
     matches.clear();
-    MatchDirection(source, target, T, dmax, min_abs_cos, step, false, &matches);
+    MatchDirection(source, target, T, dmax, min_abs_cos, step, false, &forward_hints, &matches);
     std::size_t queries = (source.cloud().size() + step - 1) / step;
     if (symmetric) {
-      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, step, true, &matches);
+      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, step, true, &backward_hints,
+                     &matches);
       queries += (target.cloud().size() + step - 1) / step;
     }
 
@@ -413,7 +422,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
   // Final pairs at the final estimate: inliers, RMS, information.
   matches.clear();
-  MatchDirection(source, target, T, dmax, min_abs_cos, 1, false, &matches);
+  MatchDirection(source, target, T, dmax, min_abs_cos, 1, false, &forward_hints, &matches);
   std::size_t kept = 0;
   double sum_sq = 0.0;
   for (const Match& m : matches) {

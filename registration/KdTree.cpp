@@ -64,11 +64,17 @@ KdTree::~KdTree() = default;
 std::size_t KdTree::size() const { return impl_->adaptor.points.size(); }
 
 Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance) const {
+  return FindClosest(query, max_distance, std::numeric_limits<std::size_t>::max());
+}
+
+Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance,
+                             std::size_t hint) const {
   Neighbor result;
   if (size() == 0 || !(max_distance > 0.0)) return result;
   const double bound_sq = std::isinf(max_distance) ? std::numeric_limits<double>::max()
                                                    : max_distance * max_distance;
   BoundedNearestResultSet set(bound_sq);
+  if (hint < size()) set.addPoint((impl_->adaptor.points[hint] - query).squaredNorm(), hint);
   impl_->tree.findNeighbors(set, query.data(), nanoflann::SearchParams());
   if (set.found_) {
     result.found = true;

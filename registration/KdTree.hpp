@@ -31,6 +31,12 @@ class KdTree {
   /// @return found == false if no point lies within the bound.
   Neighbor FindClosest(const Eigen::Vector3d& query, double max_distance) const;
 
+  /// The same result, warm-started from `hint` (an index into the points, e.g. last
+  /// iteration's match): if the hint lies within the bound, its distance becomes the initial
+  /// bound, which prunes far more of the tree. The result is still the closest point (among
+  /// equidistant points the hint may be returned). An out-of-range hint is ignored.
+  Neighbor FindClosest(const Eigen::Vector3d& query, double max_distance, std::size_t hint) const;
+
   /// The k nearest points (fewer if the set is smaller), closest first.
   std::vector<Neighbor> FindKNearest(const Eigen::Vector3d& query, std::size_t k) const;
 

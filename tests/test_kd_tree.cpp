@@ -124,3 +124,24 @@ TEST(KdTree, KNearestMatchesBruteForce) {
   }
   EXPECT_EQ(tree.FindKNearest(Eigen::Vector3d::Zero(), 5000).size(), pts.size());
 }
+
+TEST(KdTree, WarmStartedSearchGivesTheSameDistance) {
+  std::mt19937 rng(6);
+  const Points pts = RandomCloud(rng, 3000, 1.0);
+  const KdTree tree(pts);
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  std::uniform_int_distribution<std::size_t> any(0, pts.size() - 1);
+  for (int q = 0; q < 500; ++q) {
+    const Eigen::Vector3d query(u(rng), u(rng), u(rng));
+    for (double bound : {0.02, 0.2, 5.0}) {
+      const Neighbor expected = BruteClosest(pts, query, bound);
+      // Good hint (the answer), random hint (often outside the bound), invalid hint.
+      for (std::size_t hint : {expected.found ? expected.index : std::size_t{0}, any(rng),
+                               pts.size() + 7}) {
+        const Neighbor got = tree.FindClosest(query, bound, hint);
+        ASSERT_EQ(got.found, expected.found);
+        if (expected.found) EXPECT_DOUBLE_EQ(got.squared_distance, expected.squared_distance);
+      }
+    }
+  }
+}
