@@ -140,7 +140,9 @@ TEST(KdTree, WarmStartedSearchGivesTheSameDistance) {
                                pts.size() + 7}) {
         const Neighbor got = tree.FindClosest(query, bound, hint);
         ASSERT_EQ(got.found, expected.found);
-        if (expected.found) EXPECT_DOUBLE_EQ(got.squared_distance, expected.squared_distance);
+        if (expected.found) {
+          EXPECT_DOUBLE_EQ(got.squared_distance, expected.squared_distance);
+        }
       }
     }
   }
