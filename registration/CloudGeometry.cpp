@@ -10,23 +10,30 @@ std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>&
                                              const KdTree& tree, int k) {
   std::vector<Eigen::Vector3d> normals(points.size(), Eigen::Vector3d::Zero());
   const auto n = static_cast<long>(points.size());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (long i = 0; i < n; ++i) {
-    const auto neighbors = tree.FindKNearest(points[i], static_cast<std::size_t>(k));
-    if (neighbors.size() < 3) continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& nb : neighbors) mean += points[nb.index];
-    mean /= static_cast<double>(neighbors.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const auto& nb : neighbors) {
-      const Eigen::Vector3d d = points[nb.index] - mean;
-      cov += d * d.transpose();
+  const auto k_size = static_cast<std::size_t>(std::max(k, 0));
+#pragma omp parallel
+  {
+    // Per-thread neighbour buffers: no allocation per point.
+    std::vector<std::size_t> indices(k_size);
+    std::vector<double> dists(k_size);
+#pragma omp for schedule(dynamic, 256)
+    for (long i = 0; i < n; ++i) {
+      const std::size_t found = tree.FindKNearest(points[i], k_size, indices.data(), dists.data());
+      if (found < 3) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (std::size_t j = 0; j < found; ++j) mean += points[indices[j]];
+      mean /= static_cast<double>(found);
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (std::size_t j = 0; j < found; ++j) {
+        const Eigen::Vector3d d = points[indices[j]] - mean;
+        cov += d * d.transpose();
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(cov);  // closed form for 3×3: several times faster than iterating
+      // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
+      if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) continue;
+      normals[static_cast<std::size_t>(i)] = eig.eigenvectors().col(0).normalized();
     }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(cov);  // closed form for 3×3: several times faster than the iterative one
-    // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
-    if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) continue;
-    normals[i] = eig.eigenvectors().col(0).normalized();
   }
   return normals;
 }

@@ -250,7 +250,11 @@ IndexedCloud::IndexedCloud(PointCloud cloud, const RegistrationOptions& options)
       orientations_ = EstimateNormals(cloud_.points, *tree_, options.normal_neighbors);
     }
   }
-  spacing_ = MedianNeighborSpacing(cloud_.points, *tree_);
+}
+
+double IndexedCloud::spacing() const {
+  std::call_once(spacing_once_, [this] { spacing_ = MedianNeighborSpacing(cloud_.points, *tree_); });
+  return spacing_;
 }
 
 RegistrationResult Register(const PointCloud& source, const PointCloud& target,

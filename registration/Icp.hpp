@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -28,14 +29,15 @@ class IndexedCloud {
   const KdTree& tree() const { return *tree_; }
   /// Unit orientations (zero vector = unknown); empty when not needed.
   const std::vector<Eigen::Vector3d>& orientations() const { return orientations_; }
-  /// Median nearest-neighbour spacing [m] (computed on first use of D = 0).
-  double spacing() const { return spacing_; }
+  /// Median nearest-neighbour spacing [m], computed on first use (only needed for D = 0).
+  double spacing() const;
 
  private:
   PointCloud cloud_;
   std::unique_ptr<KdTree> tree_;
   std::vector<Eigen::Vector3d> orientations_;
-  double spacing_ = 0.0;
+  mutable std::once_flag spacing_once_;
+  mutable double spacing_ = 0.0;
 };
 
 enum class RegistrationStatus {

@@ -84,17 +84,22 @@ Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance,
   return result;
 }
 
+std::size_t KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k,
+                                 std::size_t* indices, double* squared_distances) const {
+  k = std::min(k, size());
+  if (k == 0) return 0;
+  nanoflann::KNNResultSet<double, std::size_t, std::size_t> set(k);
+  set.init(indices, squared_distances);
+  impl_->tree.findNeighbors(set, query.data(), nanoflann::SearchParams());
+  return set.size();
+}
+
 std::vector<Neighbor> KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k) const {
   k = std::min(k, size());
-  std::vector<Neighbor> out;
-  if (k == 0) return out;
   std::vector<std::size_t> indices(k);
   std::vector<double> dists(k);
-  nanoflann::KNNResultSet<double, std::size_t, std::size_t> set(k);
-  set.init(indices.data(), dists.data());
-  impl_->tree.findNeighbors(set, query.data(), nanoflann::SearchParams());
-  const std::size_t n = set.size();
-  out.resize(n);
+  const std::size_t n = FindKNearest(query, k, indices.data(), dists.data());
+  std::vector<Neighbor> out(n);
   for (std::size_t i = 0; i < n; ++i) out[i] = Neighbor{true, indices[i], dists[i]};
   return out;
 }

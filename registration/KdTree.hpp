@@ -40,6 +40,11 @@ class KdTree {
   /// The k nearest points (fewer if the set is smaller), closest first.
   std::vector<Neighbor> FindKNearest(const Eigen::Vector3d& query, std::size_t k) const;
 
+  /// The same into caller buffers of at least k entries (no allocation: hot loops).
+  /// @return the number found (min(k, size())).
+  std::size_t FindKNearest(const Eigen::Vector3d& query, std::size_t k, std::size_t* indices,
+                           double* squared_distances) const;
+
   std::size_t size() const;
 
  private:
