@@ -29,6 +29,28 @@ CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunRegister(const RegisterArgs& args);
 
+struct EvalArgs {
+  ConfigArgs config;
+  std::vector<std::string> estimates;  ///< trajectory files (TUM or KITTI)
+  std::string groundtruth;
+  std::string format = "auto";  ///< auto|tum|kitti, for every trajectory file
+  std::string dem;              ///< DEM GeoTIFF to judge
+  std::string reference;        ///< reference terrain GeoTIFF
+  std::string plot_dir;         ///< PNGs go here (optional)
+};
+CLI::App* AddEvalCommand(CLI::App* app, EvalArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunEval(const EvalArgs& args);
+
+struct SimulateArgs {
+  ConfigArgs config;
+  std::string out;     ///< sequence directory to write
+  bool force = false;  ///< write into a non-empty directory
+};
+CLI::App* AddSimulateCommand(CLI::App* app, SimulateArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunSimulate(const SimulateArgs& args);
+
 /// A command-line value that parses but makes no sense (exit 2).
 class UsageError : public std::runtime_error {
  public:

@@ -26,6 +26,10 @@ int main(int argc, char** argv) {
 
   RegisterArgs register_args;
   CLI::App* register_cmd = AddRegisterCommand(&app, &register_args);
+  SimulateArgs simulate_args;
+  CLI::App* simulate_cmd = AddSimulateCommand(&app, &simulate_args);
+  EvalArgs eval_args;
+  CLI::App* eval_cmd = AddEvalCommand(&app, &eval_args);
 
   try {
     app.parse(argc, argv);
@@ -36,6 +40,8 @@ int main(int argc, char** argv) {
 
   try {
     if (register_cmd->parsed()) return RunRegister(register_args);
+    if (simulate_cmd->parsed()) return RunSimulate(simulate_args);
+    if (eval_cmd->parsed()) return RunEval(eval_args);
   } catch (const rovermap::config::ConfigError& e) {
     std::cerr << "rovermap: config error: " << e.what() << "\n";
     return kExitUsage;

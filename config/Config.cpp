@@ -200,6 +200,27 @@ static void ValidateCombinations(const Config& config) {
         "registration.residual: point_to_plane needs surface normals; with geometry: curve set "
         "registration.residual=point_to_point");
   }
+  const auto& st = config.stereo;
+  if (st.num_disparities % 16 != 0) {
+    throw ConfigError("stereo.num_disparities: must be a multiple of 16 (got " +
+                      std::to_string(st.num_disparities) + ")");
+  }
+  if (st.block_size % 2 == 0) {
+    throw ConfigError("stereo.block_size: must be odd (got " + std::to_string(st.block_size) + ")");
+  }
+  if (st.algorithm == stereo::Algorithm::kBm && (st.block_size < 5 || st.block_size > 255)) {
+    throw ConfigError("stereo.block_size: must be in [5, 255] with algorithm: bm");
+  }
+  if (st.p1 > 0 && st.p2 > 0 && st.p2 <= st.p1) {
+    throw ConfigError("stereo.p2: must be > stereo.p1");
+  }
+  if (st.max_range_m <= st.min_range_m) {
+    throw ConfigError("stereo.max_range_m: must be > stereo.min_range_m");
+  }
+  if (config.sim.terrain_size_m / config.sim.terrain_cell_m >= 20000) {
+    throw ConfigError("sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
+                      "samples along an edge)");
+  }
 }
 
 Config LoadConfig(const std::optional<std::filesystem::path>& file,

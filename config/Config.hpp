@@ -6,7 +6,12 @@
 #include <vector>
 
 #include "config/ConfigError.hpp"
+#include "dem/ElevationMap.hpp"
+#include "dem/OctoMapOptions.hpp"
+#include "eval/EvalOptions.hpp"
 #include "registration/Options.hpp"
+#include "sim/SimOptions.hpp"
+#include "stereo/StereoOptions.hpp"
 
 namespace rovermap::config {
 
@@ -14,6 +19,11 @@ namespace rovermap::config {
 /// keys (`<section>.<field>`) are listed in config/default.yaml and by KnownKeys().
 struct Config {
   registration::RegistrationOptions registration;
+  stereo::StereoOptions stereo;
+  sim::SimOptions sim;
+  dem::ElevationMapOptions dem;
+  dem::OctoMapOptions octomap;
+  eval::EvalOptions eval;
 };
 
 /// Builds a Config: the struct defaults, then `file` (nested YAML, one mapping per section),

@@ -24,6 +24,16 @@ const EnumNames<Residual> kResidualNames = {{"point_to_point", Residual::kPointT
                                             {"point_to_plane", Residual::kPointToPlane}};
 const EnumNames<Convergence> kConvergenceNames = {{"absolute", Convergence::kAbsolute},
                                                   {"relative", Convergence::kRelative}};
+const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
+    {"sgbm_3way", stereo::Algorithm::kSgbm3Way},
+    {"sgbm", stereo::Algorithm::kSgbm},
+    {"sgbm_hh", stereo::Algorithm::kSgbmHh},
+    {"bm", stereo::Algorithm::kBm}};
+const EnumNames<sim::PathShape> kPathShapeNames = {{"straight", sim::PathShape::kStraight},
+                                                 {"curves", sim::PathShape::kCurves},
+                                                 {"loop", sim::PathShape::kLoop}};
+const EnumNames<sim::SensorKind> kSensorKindNames = {{"stereo", sim::SensorKind::kStereo},
+                                                   {"cloud", sim::SensorKind::kCloud}};
 
 // The table. Key names follow the struct fields, except where DESIGN.md §5 fixes the contract
 // name (reference_distance). One line per key; DumpYaml and default.yaml follow this order.
@@ -64,6 +74,133 @@ std::vector<KeyEntry> BuildRegistry() {
   reg.Double("mahalanobis_gate", &R::mahalanobis_gate, "chi^2", GreaterThan(0),
              "on the squared Mahalanobis distance (3 dof, 95 %)");
   reg.Int("min_pairs", &R::min_pairs, "count", AtLeast(3), "fewer pairs after gating = failure");
+
+  using S = stereo::StereoOptions;
+  SectionKeys<S> st(keys, "stereo", &Config::stereo);
+  st.Enum("algorithm", &S::algorithm, kStereoAlgorithmNames, "OpenCV matcher (sgbm_3way: 5 paths)");
+  st.Int("min_disparity", &S::min_disparity, "px", AnyValue(), "smallest disparity searched");
+  st.Int("num_disparities", &S::num_disparities, "px", GreaterThan(0),
+         "search range; a multiple of 16");
+  st.Int("block_size", &S::block_size, "px", AtLeast(1), "odd window side (bm: 5..255)");
+  st.Int("p1", &S::p1, "cost", AtLeast(0), "SGBM penalty, |dd| = 1; 0 = 8 * block^2");
+  st.Int("p2", &S::p2, "cost", AtLeast(0), "SGBM penalty, |dd| > 1; 0 = 32 * block^2");
+  st.Int("disp12_max_diff", &S::disp12_max_diff, "px", AtLeast(-1),
+         "left-right consistency tolerance; -1 = off");
+  st.Int("pre_filter_cap", &S::pre_filter_cap, "count", Bounds{1, false, 63, false},
+         "prefilter clip");
+  st.Int("uniqueness_ratio", &S::uniqueness_ratio, "%", Bounds{0, false, 100, false},
+         "best cost margin over the second; 0 = off");
+  st.Int("speckle_window_size", &S::speckle_window_size, "px", AtLeast(0),
+         "remove disparity blobs smaller than this; 0 = off");
+  st.Int("speckle_range", &S::speckle_range, "px", AtLeast(0), "disparity step inside a blob");
+  st.Int("texture_threshold", &S::texture_threshold, "count", AtLeast(0),
+         "bm only: minimum window texture");
+  st.Double("disparity_sigma_px", &S::disparity_sigma_px, "px", AtLeast(0),
+            "error model: sigma_z = z^2 * sigma_d / (f * b)");
+  st.Double("pixel_sigma_px", &S::pixel_sigma_px, "px", AtLeast(0),
+            "error model: image position noise (lateral)");
+  st.Double("min_range_m", &S::min_range_m, "m", AtLeast(0), "drop nearer points");
+  st.Double("max_range_m", &S::max_range_m, "m", GreaterThan(0), "drop farther points");
+  st.Bool("compute_normals", &S::compute_normals, "normals from the organised image");
+  st.Int("normal_step_px", &S::normal_step_px, "px", AtLeast(1), "neighbour offset for normals");
+  st.Double("normal_max_depth_jump", &S::normal_max_depth_jump, "ratio", GreaterThan(0),
+            "depth edge: |dz| / z per pixel of step");
+  st.Double("voxel_size_m", &S::voxel_size_m, "m", AtLeast(0), "voxel downsampling; 0 = off");
+
+  using M = sim::SimOptions;
+  SectionKeys<M> sim(keys, "sim", &Config::sim);
+  sim.Int("seed", &M::seed, "count", AnyValue(), "same seed, same sequence");
+  sim.Int("frames", &M::frames, "count", AtLeast(1), "frames in the sequence");
+  sim.Double("frame_rate_hz", &M::frame_rate_hz, "Hz", GreaterThan(0), "frame rate");
+  sim.Double("speed_m_s", &M::speed_m_s, "m/s", AtLeast(0), "rover ground speed");
+  sim.Double("origin_latitude_deg", &M::origin_latitude_deg, "deg", Bounds{-90, false, 90, false},
+             "geodetic origin (sequence.yaml)");
+  sim.Double("origin_longitude_deg", &M::origin_longitude_deg, "deg",
+             Bounds{-180, false, 180, false}, "geodetic origin");
+  sim.Double("origin_altitude_m", &M::origin_altitude_m, "m", AnyValue(), "geodetic origin");
+  sim.Double("terrain_size_m", &M::terrain_size_m, "m", GreaterThan(0), "edge of the square terrain");
+  sim.Double("terrain_cell_m", &M::terrain_cell_m, "m", GreaterThan(0), "heightfield spacing");
+  sim.Double("relief_m", &M::relief_m, "m", AtLeast(0), "fractal relief amplitude");
+  sim.Double("relief_wavelength_m", &M::relief_wavelength_m, "m", GreaterThan(0),
+             "largest relief wavelength");
+  sim.Int("octaves", &M::octaves, "count", Bounds{1, false, 16, false}, "fractal octaves");
+  sim.Double("roughness", &M::roughness, "ratio", Bounds{0, false, 1, false},
+             "amplitude ratio between octaves");
+  sim.Double("slope_x_deg", &M::slope_x_deg, "deg", Bounds{-45, false, 45, false},
+             "regional slope rising to the east");
+  sim.Double("slope_y_deg", &M::slope_y_deg, "deg", Bounds{-45, false, 45, false},
+             "regional slope rising to the north");
+  sim.Int("craters", &M::craters, "count", AtLeast(0), "crater count");
+  sim.Double("crater_max_radius_m", &M::crater_max_radius_m, "m", GreaterThan(0), "largest crater");
+  sim.Int("rocks", &M::rocks, "count", AtLeast(0), "rock count");
+  sim.Double("rock_max_radius_m", &M::rock_max_radius_m, "m", GreaterThan(0), "largest rock");
+  sim.Double("keep_out_m", &M::keep_out_m, "m", AtLeast(0), "no rocks this close to the path");
+  sim.Enum("path", &M::path, kPathShapeNames, "rover path shape");
+  sim.Double("turn_radius_m", &M::turn_radius_m, "m", GreaterThan(0),
+             "loop radius / tightest curve radius");
+  sim.Double("wheelbase_m", &M::wheelbase_m, "m", GreaterThan(0), "pitch from the terrain");
+  sim.Double("track_m", &M::track_m, "m", GreaterThan(0), "roll from the terrain");
+  sim.Enum("sensor", &M::sensor, kSensorKindNames, "stereo images or PLY clouds");
+  sim.Double("mast_height_m", &M::mast_height_m, "m", AnyValue(), "camera above the body origin");
+  sim.Double("mast_forward_m", &M::mast_forward_m, "m", AnyValue(), "camera ahead of the body origin");
+  sim.Double("camera_tilt_deg", &M::camera_tilt_deg, "deg", Bounds{-89, false, 89, false},
+             "optical axis below the horizontal");
+  sim.Double("baseline_m", &M::baseline_m, "m", GreaterThan(0), "stereo baseline");
+  sim.Double("focal_px", &M::focal_px, "px", GreaterThan(0), "focal length");
+  sim.Int("image_width", &M::image_width, "px", AtLeast(16), "image width");
+  sim.Int("image_height", &M::image_height, "px", AtLeast(16), "image height");
+  sim.Double("sun_elevation_deg", &M::sun_elevation_deg, "deg", Bounds{0, false, 90, false},
+             "sun above the horizon");
+  sim.Double("sun_azimuth_deg", &M::sun_azimuth_deg, "deg", AnyValue(),
+             "sun direction, from east counter-clockwise");
+  sim.Double("image_noise", &M::image_noise, "grey", AtLeast(0), "sensor noise sigma");
+  sim.Double("max_range_m", &M::max_range_m, "m", GreaterThan(0), "farther is sky");
+  sim.Int("cloud_stride_px", &M::cloud_stride_px, "px", AtLeast(1), "cloud mode: pixel stride");
+  sim.Double("disparity_sigma_px", &M::disparity_sigma_px, "px", AtLeast(0),
+             "cloud mode: disparity noise");
+  sim.Double("pixel_sigma_px", &M::pixel_sigma_px, "px", AtLeast(0), "cloud mode: image noise");
+  sim.Double("outlier_fraction", &M::outlier_fraction, "ratio", Bounds{0, false, 1, false},
+             "cloud mode: points at a random depth");
+  sim.Double("odom_scale_error", &M::odom_scale_error, "ratio", GreaterThan(-1),
+             "wheel odometry scale error");
+  sim.Double("odom_slip_mean", &M::odom_slip_mean, "ratio", GreaterThan(-1), "mean slip");
+  sim.Double("odom_slip_sigma", &M::odom_slip_sigma, "ratio", AtLeast(0), "per-step slip sigma");
+  sim.Double("heading_bias_deg_s", &M::heading_bias_deg_s, "deg/s", AnyValue(),
+             "heading-rate bias");
+  sim.Double("heading_random_walk_deg_rt_s", &M::heading_random_walk_deg_rt_s, "deg/sqrt(s)",
+             AtLeast(0), "heading random walk");
+
+  using D = dem::ElevationMapOptions;
+  SectionKeys<D> dem_keys(keys, "dem", &Config::dem);
+  dem_keys.Double("cell_size_m", &D::cell_size_m, "m", GreaterThan(0), "DEM cell edge");
+  dem_keys.Int("tile_cells", &D::tile_cells, "count", Bounds{1, false, 4096, false},
+               "cells along a tile edge (tiles allocated on first touch)");
+  dem_keys.Double("mahalanobis_gate", &D::mahalanobis_gate, "chi^2", GreaterThan(0),
+                  "squared height Mahalanobis gate (1 dof; 9 = 3 sigma)");
+  dem_keys.Double("default_point_stddev_m", &D::default_point_stddev_m, "m", GreaterThan(0),
+                  "height sigma of points without a covariance");
+  dem_keys.Double("min_point_variance_m2", &D::min_point_variance_m2, "m^2", AtLeast(0),
+                  "floor on a point's height variance");
+
+  using O = dem::OctoMapOptions;
+  SectionKeys<O> octo(keys, "octomap", &Config::octomap);
+  octo.Bool("enabled", &O::enabled, "fuse frames into an OctoMap and write map.bt");
+  octo.Double("resolution_m", &O::resolution_m, "m", GreaterThan(0), "leaf voxel edge");
+  octo.Double("max_range_m", &O::max_range_m, "m", AtLeast(0), "ray length cap; 0 = unlimited");
+  octo.Double("prob_hit", &O::prob_hit, "probability", Bounds{0.5, true, 1, true},
+              "occupancy update of an endpoint");
+  octo.Double("prob_miss", &O::prob_miss, "probability", Bounds{0, true, 0.5, true},
+              "occupancy update of a traversed voxel");
+  octo.Bool("write_ot", &O::write_ot, "also write map.ot (with probabilities)");
+
+  using E = eval::EvalOptions;
+  SectionKeys<E> ev(keys, "eval", &Config::eval);
+  ev.Double("association_tolerance_s", &E::association_tolerance_s, "s", AtLeast(0),
+            "max |t_estimate - t_groundtruth| of a pair");
+  ev.Double("rpe_delta_m", &E::rpe_delta_m, "m", GreaterThan(0),
+            "RPE: ground-truth travel per pair");
+  ev.DoubleList("segment_lengths_m", &E::segment_lengths_m, "m", GreaterThan(0),
+                "KITTI-style segments (devkit: 100..800 for cars)");
 
   return keys;
 }

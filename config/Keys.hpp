@@ -115,6 +115,28 @@ class SectionKeys {
         [s = section_, field](const Config& c) { return FormatDouble((c.*s).*field); });
   }
 
+  /// A non-empty YAML list of numbers, each within `bounds` (a single number is a list of one).
+  void DoubleList(const std::string& key, std::vector<double> Section::*field,
+                  const std::string& unit, Bounds bounds, const std::string& doc) {
+    Add(
+        key, "[" + unit + ", list] " + doc + "; each " + Describe(bounds),
+        [s = section_, field, bounds](const YAML::Node& n, Config& c) {
+          std::vector<double> values;
+          if (n.IsSequence()) {
+            for (const YAML::Node& item : n) values.push_back(ParseDouble(item, bounds));
+          } else {
+            values.push_back(ParseDouble(n, bounds));
+          }
+          if (values.empty()) throw ValueError("expected a non-empty list of numbers");
+          (c.*s).*field = std::move(values);
+        },
+        [s = section_, field](const Config& c) {
+          std::string text;
+          for (double v : (c.*s).*field) text += (text.empty() ? "" : ", ") + FormatDouble(v);
+          return "[" + text + "]";
+        });
+  }
+
   void Bool(const std::string& key, bool Section::*field, const std::string& doc) {
     Add(
         key, "[true|false] " + doc,

@@ -37,3 +37,8 @@ print(f"  error against the reference alignment: {err_deg:.3f} deg, {err_mm:.3f}
 PY
 echo "  full result (JSON): $result"
 echo "  picture of the alignment before and after: $out/register_bun045_bun000.png"
+
+# A small synthetic rover traverse (stereo frames, dead reckoning, ground truth, true terrain),
+# the input the mapper will consume.
+"$bin" simulate --out "$out/sim" --force > /dev/null
+echo "  simulated sequence (30 stereo frames, odometry.tum, groundtruth.tum, terrain.tif): $out/sim"

@@ -1,0 +1,48 @@
+#pragma once
+// sequence.yaml (DESIGN.md §4) read into a plain struct. Only config/ sees YAML; io/Sequence
+// turns this into the sequence's typed description and checks it against the other files.
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace rovermap::config {
+
+/// `camera:` of sequence.yaml: a rectified pair.
+struct SequenceCamera {
+  int width = 0;          ///< [px]
+  int height = 0;         ///< [px]
+  double fx = 0.0;        ///< [px]
+  double fy = 0.0;        ///< [px]
+  double cx = 0.0;        ///< [px]
+  double cy = 0.0;        ///< [px]
+  double baseline = 0.0;  ///< [m]
+  int line = 0;           ///< line of `camera:` in the file (for messages)
+};
+
+/// The keys of sequence.yaml as written (angles in degrees, lengths in metres), after range
+/// checks on each value. Exactly one of `rotation_rpy_deg` and `quaternion_xyzw` is set.
+struct SequenceYaml {
+  std::string sensor_type;                                ///< "stereo" or "cloud"
+  std::optional<SequenceCamera> camera;                   ///< required for stereo
+  std::array<double, 3> translation{};                    ///< T_body_sensor translation [m]
+  std::optional<std::array<double, 3>> rotation_rpy_deg;  ///< R = Rz(y)·Ry(p)·Rx(r) [deg]
+  std::optional<std::array<double, 4>> quaternion_xyzw;   ///< unit quaternion x y z w
+  double latitude_deg = 0.0;                              ///< origin, [-90, 90]
+  double longitude_deg = 0.0;                             ///< origin, [-180, 180]
+  double altitude_m = 0.0;                                ///< origin
+  double frame_rate_hz = 0.0;                             ///< > 0
+  std::string body = "earth";                             ///< earth|moon|mars
+};
+
+/// Reads and checks `path` (a sequence.yaml).
+/// @throw ConfigError "FILE:LINE: KEY: reason" if the file is missing or not YAML, a required
+///        key is missing, a key is unknown (DESIGN §4: unknown keys are an error), a value has
+///        the wrong type or is out of range (non-positive focal length, baseline, size or frame
+///        rate; principal point outside the image; latitude/longitude out of range; a
+///        quaternion that is not unit length within 1e-3; both or neither of rotation_rpy_deg
+///        and quaternion), or a stereo sequence has no camera.
+SequenceYaml ReadSequenceYaml(const std::filesystem::path& path);
+
+}  // namespace rovermap::config

@@ -1,0 +1,211 @@
+#pragma once
+// The elevation grid: sparse 256×256-cell tiles allocated on first touch (GridIndex), six
+// layers per cell, and per-cell Kalman fusion of registered points (DESIGN §3, §9).
+//
+// Grid frame. Cells are laid out in a horizontal frame rotated from the world (ENU) frame by
+// `grid_rotation_rad` (counter-clockwise about z): p_grid = R(θ)·(x_world, y_world). The map
+// writer sets θ to the meridian convergence of the output projection so that grid north is
+// projection north and the GeoTIFF needs no resampling (io/Georeference.hpp); θ = 0 is plain ENU.
+// Heights are world z (metres above the origin's altitude) in every frame.
+//
+// Fusion rule for a point with height z and variance r landing in a cell with estimate (h, σ²):
+//  - empty cell: h = z, σ² = r;
+//  - Mahalanobis test d² = (z − h)² / (σ² + r) <= gate: Kalman update
+//    h += K(z − h), σ² = (1 − K)σ², K = σ² / (σ² + r);
+//  - d² > gate and the cell's estimate holds points of EARLIER frames: the point is an outlier
+//    against the map and is rejected (counted, the cell unchanged);
+//  - d² > gate and the estimate was started in THIS frame (only this view has seen the cell):
+//    the cell holds a vertical structure (a rock face, an overhang), and the higher point wins.
+//    A higher point restarts the cell (h = z, σ² = r, count = 1); a lower one is dropped
+//    (counted). Min and max keep both, so max − min shows the structure's height.
+// Non-finite points, variances or positions outside the grid are dropped and counted.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "dem/GridIndex.hpp"
+
+namespace rovermap::dem {
+
+/// Options of the elevation grid and its fusion; plain values, in-class defaults.
+struct ElevationMapOptions {
+  double cell_size_m = 0.05;      ///< [m] edge of a square cell, > 0
+  int tile_cells = 256;           ///< [count] cells along a tile edge, >= 1
+  double mahalanobis_gate = 9.0;  ///< [chi^2, 1 dof] squared Mahalanobis distance; 9 = 3 sigma
+  /// [m] height standard deviation of a point given without a covariance.
+  double default_point_stddev_m = 0.02;
+  /// [m^2] floor on a point's height variance, so one perfect point cannot freeze a cell.
+  double min_point_variance_m2 = 1e-6;
+  /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
+  /// key: derived from the georeference.
+  double grid_rotation_rad = 0.0;
+};
+
+/// @throw std::invalid_argument naming the field if a value is out of range.
+void Validate(const ElevationMapOptions& options);
+
+/// One cell's layers. Empty cells have NaN elevation, variance, min and max and count 0.
+struct CellValue {
+  static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
+  float elevation_m = kEmpty;    ///< fused height [m] (world z)
+  float variance_m2 = kEmpty;    ///< variance of elevation_m [m^2]
+  float min_m = kEmpty;          ///< lowest point fused, or dropped by the in-frame rule [m]
+  float max_m = kEmpty;          ///< highest such point [m]
+  std::uint32_t count = 0;       ///< points fused into the current estimate
+  std::uint32_t last_frame = 0;  ///< frame of the last update
+  bool Empty() const { return count == 0; }
+};
+
+/// One cell as stored: its layers and the frame its current estimate started in (for the
+/// in-frame rule). 32 bytes, aligned, so a fusion update touches one cache line.
+struct alignas(32) CellRecord {
+  CellValue value;
+  std::uint32_t start_frame = 0;
+};
+
+/// Storage of one tile: tile_cells² records, row-major, rows south to north
+/// (GridIndex::LinearIndex).
+struct Tile {
+  explicit Tile(int tile_cells);
+  std::vector<CellRecord> cells;
+  std::size_t filled = 0;  ///< cells with count > 0
+};
+
+/// What FuseFrame did with the points it was given: points = fused + replaced +
+/// below_in_frame + rejected_outliers + dropped_nonfinite + dropped_out_of_grid.
+struct FusionStats {
+  std::size_t points = 0;               ///< points given
+  std::size_t fused = 0;                ///< Kalman updates and first points of empty cells
+  std::size_t replaced = 0;             ///< in-frame: higher point restarted the cell
+  std::size_t below_in_frame = 0;       ///< in-frame: lower disagreeing point dropped
+  std::size_t rejected_outliers = 0;    ///< failed the gate against an earlier frame
+  std::size_t dropped_nonfinite = 0;    ///< NaN/inf coordinates; non-finite or negative variance
+  std::size_t dropped_out_of_grid = 0;  ///< beyond ±kMaxCellIndex
+  std::size_t new_tiles = 0;            ///< tiles allocated by this call
+};
+
+/// Per-frame context of FuseFrame.
+struct FrameContext {
+  std::uint32_t frame = 0;  ///< frame index (the in-frame rule compares it)
+  /// Rotation taking the covariances' frame into the world frame (e.g. R_world_sensor when
+  /// the covariances are in the sensor frame); identity when they are already in world.
+  Eigen::Matrix3d R_world_cov = Eigen::Matrix3d::Identity();
+  /// Centre of the pose perturbation [m, world] (the sensor position).
+  Eigen::Vector3d sensor_origin_world = Eigen::Vector3d::Zero();
+  /// Optional 6×6 covariance of the frame's pose, order rx ry rz tx ty tz [rad, m], a
+  /// perturbation applied on the left in the world frame about sensor_origin_world: the point
+  /// p moves by δθ×(p − c) + δt. Adds J Σ Jᵀ, J = ∂z/∂(δθ, δt) = (dy, −dx, 0, 0, 0, 1).
+  std::optional<Eigen::Matrix<double, 6, 6>> pose_covariance;
+};
+
+/// The sparse elevation grid. Not thread-safe for writes; const queries are.
+class ElevationMap {
+ public:
+  /// @throw std::invalid_argument if `options` are invalid (see Validate).
+  explicit ElevationMap(const ElevationMapOptions& options = {});
+
+  const ElevationMapOptions& options() const { return options_; }
+  const GridIndex& index() const { return index_; }
+
+  /// Fuses one frame of world points. `covariances` is empty (every point gets
+  /// default_point_stddev_m) or one 3×3 covariance [m^2] per point in the frame rotated by
+  /// ctx.R_world_cov; the height variance is r₃ᵀΣr₃ (r₃ = third row of R_world_cov) plus the
+  /// pose term. Never throws (a size mismatch makes the covariances ignored, see
+  /// `covariances_ignored`).
+  FusionStats FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
+                        const std::vector<Eigen::Matrix3d>& covariances, const FrameContext& ctx);
+
+  /// Fuses one point with a height variance [m^2] (the rule above). Returns false if the point
+  /// was not fused into the height (rejected, dropped or lower in frame). Never throws.
+  bool FusePoint(const Eigen::Vector3d& point_world, double height_variance_m2, std::uint32_t frame,
+                 FusionStats* stats = nullptr);
+
+  /// Overwrites one cell (e.g. a simulator's true terrain): elevation and variance, count,
+  /// min = max = elevation. Allocates the tile. A non-finite elevation empties the cell.
+  void SetCell(CellIndex cell, double elevation_m, double variance_m2, std::uint32_t count = 1,
+               std::uint32_t frame = 0);
+
+  /// Grid-frame position of a world position [m]: R(θ)·(x, y).
+  Eigen::Vector2d WorldToGrid(double x_m, double y_m) const;
+  /// World position of a grid-frame position [m].
+  Eigen::Vector2d GridToWorld(const Eigen::Vector2d& grid_m) const;
+  /// The cell holding world (x, y); nullopt if non-finite or beyond the grid.
+  std::optional<CellIndex> WorldToCell(double x_m, double y_m) const;
+  /// World (x, y) of a cell's centre [m].
+  Eigen::Vector2d CellCenterWorld(CellIndex cell) const;
+
+  /// The cell's layers; nullopt if its tile was never allocated or the cell is empty.
+  std::optional<CellValue> Cell(CellIndex cell) const;
+  /// Fused height at world (x, y) [m]; NaN if the cell is empty or the input non-finite.
+  double HeightAt(double x_m, double y_m) const;
+  /// Variance of that height [m^2]; NaN likewise.
+  double VarianceAt(double x_m, double y_m) const;
+
+  /// Calls f(CellIndex, const CellValue&) for every non-empty cell, tile by tile (unordered).
+  template <typename F>
+  void ForEachCell(F&& f) const {
+    const int n = index_.geometry().tile_cells;
+    for (const auto& [tile_index, tile] : tiles_) {
+      if (tile->filled == 0) continue;
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          const std::size_t i = index_.LinearIndex({x, y});
+          const CellValue& value = tile->cells[i].value;
+          if (value.count == 0) continue;
+          f(index_.TileLocalToCell(tile_index, {x, y}), value);
+        }
+      }
+    }
+  }
+
+  /// The tile holding `tile_index`, or nullptr if never allocated.
+  const Tile* FindTile(TileIndex tile_index) const;
+  /// Every allocated tile index (unordered).
+  std::vector<TileIndex> TileIndices() const;
+  std::size_t TileCount() const { return tiles_.size(); }
+  /// Non-empty cells [count].
+  std::size_t CellCount() const;
+  /// Bounding box of the cells ever written (grid cells); empty for a new map.
+  const CellBounds& bounds() const { return bounds_; }
+  /// Bytes held by the tiles' layers (not the hash table overhead).
+  std::size_t MemoryBytes() const;
+  /// Sizes mismatched between points and covariances over all FuseFrame calls [count].
+  std::size_t covariances_ignored() const { return covariances_ignored_; }
+
+ private:
+  Tile& TileFor(TileIndex tile_index, FusionStats* stats);
+  bool FuseAt(CellIndex cell, double z, double r, std::uint32_t frame, FusionStats* stats);
+
+  ElevationMapOptions options_;
+  GridIndex index_;
+  double cos_ = 1.0;
+  double sin_ = 0.0;
+  std::unordered_map<TileIndex, std::unique_ptr<Tile>, TileIndexHash> tiles_;
+  // The last tile touched: points arrive in spatially coherent runs. Moving a map clears the
+  // source's cache (its tiles went with the move).
+  struct TileCache {
+    TileIndex index{};
+    Tile* tile = nullptr;
+    TileCache() = default;
+    TileCache(TileCache&& other) noexcept : index(other.index), tile(other.tile) {
+      other.tile = nullptr;
+    }
+    TileCache& operator=(TileCache&& other) noexcept {
+      index = other.index;
+      tile = other.tile;
+      other.tile = nullptr;
+      return *this;
+    }
+  };
+  TileCache cache_;
+  CellBounds bounds_;
+  std::size_t covariances_ignored_ = 0;
+};
+
+}  // namespace rovermap::dem

@@ -1,0 +1,65 @@
+#include "dem/OctoMapFusion.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace rovermap::dem {
+namespace {
+
+void Check(bool ok, const std::string& field, const std::string& rule, double got) {
+  if (ok) return;
+  std::ostringstream msg;
+  msg << field << ": must be " << rule << " (got " << got << ")";
+  throw std::invalid_argument(msg.str());
+}
+
+}  // namespace
+
+void Validate(const OctoMapOptions& o) {
+  Check(std::isfinite(o.resolution_m) && o.resolution_m > 0.0, "resolution_m", "> 0",
+        o.resolution_m);
+  Check(std::isfinite(o.max_range_m) && o.max_range_m >= 0.0, "max_range_m", ">= 0", o.max_range_m);
+  Check(o.prob_hit > 0.5 && o.prob_hit < 1.0, "prob_hit", "in (0.5, 1)", o.prob_hit);
+  Check(o.prob_miss > 0.0 && o.prob_miss < 0.5, "prob_miss", "in (0, 0.5)", o.prob_miss);
+}
+
+OctoMapFusion::OctoMapFusion(const OctoMapOptions& options) : options_(options) {
+  Validate(options_);
+  if (!options_.enabled) return;
+  tree_ = std::make_unique<octomap::OcTree>(options_.resolution_m);
+  tree_->setProbHit(options_.prob_hit);
+  tree_->setProbMiss(options_.prob_miss);
+}
+
+OctoMapFrameStats OctoMapFusion::InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
+                                             const Eigen::Vector3d& sensor_origin_world) {
+  OctoMapFrameStats stats;
+  stats.points = points_world.size();
+  if (!tree_ || !sensor_origin_world.allFinite()) {
+    stats.skipped = true;
+    return stats;
+  }
+  octomap::Pointcloud cloud;
+  cloud.reserve(points_world.size());
+  for (const Eigen::Vector3d& p : points_world) {
+    if (!p.allFinite()) {
+      ++stats.dropped_nonfinite;
+      continue;
+    }
+    cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                    static_cast<float>(p.z()));
+  }
+  stats.inserted = cloud.size();
+  const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
+                                static_cast<float>(sensor_origin_world.y()),
+                                static_cast<float>(sensor_origin_world.z()));
+  const double max_range = options_.max_range_m > 0.0 ? options_.max_range_m : -1.0;
+  // Discretized: endpoints sharing a voxel cast one ray; lazy: inner nodes once, below.
+  tree_->insertPointCloud(cloud, origin, max_range, /*lazy_eval=*/true, /*discretize=*/true);
+  tree_->updateInnerOccupancy();
+  return stats;
+}
+
+}  // namespace rovermap::dem

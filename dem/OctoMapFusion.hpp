@@ -1,0 +1,46 @@
+#pragma once
+// Fusion of registered frames into an octomap::OcTree (Hornung et al. 2013): each frame's
+// points are inserted with the sensor origin, so the rays between them carve free space.
+
+#include <octomap/OcTree.h>
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "dem/OctoMapOptions.hpp"
+
+namespace rovermap::dem {
+
+/// What InsertFrame did.
+struct OctoMapFrameStats {
+  std::size_t points = 0;             ///< points given
+  std::size_t inserted = 0;           ///< finite points passed to the tree
+  std::size_t dropped_nonfinite = 0;  ///< NaN/inf points (never inserted)
+  bool skipped = false;               ///< disabled, or the sensor origin was not finite
+};
+
+/// One OcTree fed frame by frame: discretized, lazily evaluated insertion (each voxel updated
+/// once per frame), then one inner-occupancy update per frame.
+class OctoMapFusion {
+ public:
+  /// @throw std::invalid_argument if `options` are invalid.
+  explicit OctoMapFusion(const OctoMapOptions& options = {});
+
+  const OctoMapOptions& options() const { return options_; }
+  bool enabled() const { return tree_ != nullptr; }
+
+  /// Inserts world points seen from `sensor_origin_world` [m]. Never throws.
+  OctoMapFrameStats InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
+                                const Eigen::Vector3d& sensor_origin_world);
+
+  /// The tree; nullptr when disabled.
+  const octomap::OcTree* tree() const { return tree_.get(); }
+
+ private:
+  OctoMapOptions options_;
+  std::unique_ptr<octomap::OcTree> tree_;
+};
+
+}  // namespace rovermap::dem

@@ -1,0 +1,72 @@
+#pragma once
+// DEM accuracy against a reference terrain (`rovermap eval --dem A.tif --reference B.tif`,
+// DESIGN.md §8): both grids compared where both have data, on the coarser of the two grids.
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace rovermap::eval {
+
+/// A north-up (axis-aligned) raster as GDAL reads it; band 1 elevation, optional band 2 its
+/// standard deviation (dem.tif's layout, DESIGN.md §6).
+struct DemRaster {
+  std::string file;
+  int width = 0;
+  int height = 0;
+  /// GDAL geotransform: x = g[0] + (col)·g[1], y = g[3] + (row)·g[5] at a cell's corner;
+  /// g[2] = g[4] = 0.
+  std::array<double, 6> geotransform = {0.0, 1.0, 0.0, 0.0, 0.0, -1.0};
+  std::string crs_wkt;           ///< empty when the file has no CRS
+  std::vector<float> elevation;  ///< [m], row-major, NaN = no data (the band's nodata mapped)
+  std::vector<float> sigma;      ///< [m], band 2 likewise, or empty when there is one band
+  double cell_area_m2() const { return std::abs(geotransform[1] * geotransform[5]); }
+};
+
+/// Reads bands 1 and 2 (if present) as Float32; values equal to a band's nodata become NaN.
+/// @throw io::IoError naming the file if GDAL cannot open it, it has no georeferencing
+///        (geotransform), or its grid is rotated.
+DemRaster ReadDemRaster(const std::filesystem::path& path);
+
+/// True if both have no CRS, or both have one and GDAL finds them the same.
+bool SameCrs(const DemRaster& a, const DemRaster& b);
+
+enum class DemStatus { kOk, kCrsMismatch, kNoReferenceData, kNoOverlap };
+std::string ToString(DemStatus status);
+
+struct DemComparison {
+  DemStatus status = DemStatus::kOk;
+  std::string message;     ///< why the status is not kOk
+  double rmse_m = 0.0;     ///< sqrt(mean(e²)), e = DEM − reference [m]
+  double bias_m = 0.0;     ///< mean(e) [m]: positive = the DEM lies above the reference
+  double p95_abs_m = 0.0;  ///< 95th percentile of |e| (linear between order statistics) [m]
+  double max_abs_m = 0.0;  ///< [m]
+  /// Fraction of the reference's cells with data (on its own grid) whose centre falls in a
+  /// comparison cell where the DEM has data.
+  double coverage = 0.0;
+  /// Fraction of the compared cells with a stated σ (band 2) where |e| <= 2σ; NaN without σ.
+  double within_2sigma = 0.0;
+  std::size_t cells = 0;        ///< compared cells
+  std::size_t sigma_cells = 0;  ///< compared cells with a finite σ
+  /// The comparison grid: the coarser raster's (the reference's when equal), the finer one
+  /// averaged into it (mean of its cells whose centres fall in each cell, σ likewise).
+  bool on_reference_grid = true;
+  double cell_size_m = 0.0;  ///< sqrt of the comparison cell area
+  int width = 0;
+  int height = 0;
+  bool north_row_first = true;  ///< row 0 is the northern edge (geotransform[5] < 0)
+  std::vector<float> error_m;   ///< e per comparison cell, row-major, NaN where not compared
+};
+
+/// Compares `dem` with `reference`. Never throws; a CRS mismatch, a reference without data or no
+/// cell with both gives that status and a message naming both files.
+DemComparison CompareDems(const DemRaster& dem, const DemRaster& reference);
+
+/// rmse_m, bias_m, p95_abs_m, coverage, within_2sigma, cells (DESIGN.md §8) and the rest; NaN →
+/// null.
+nlohmann::json ToJson(const DemComparison& comparison);
+
+}  // namespace rovermap::eval

@@ -1,0 +1,253 @@
+#include "io/GeoTiff.hpp"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <stdexcept>
+#include <system_error>
+
+#include "io/IoError.hpp"
+
+namespace rovermap::io {
+namespace {
+
+void RegisterGdal() {
+  static std::once_flag once;
+  std::call_once(once, [] { GDALAllRegister(); });
+}
+
+struct DatasetCloser {
+  void operator()(GDALDataset* ds) const {
+    if (ds != nullptr) GDALClose(GDALDataset::ToHandle(ds));
+  }
+};
+using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
+
+// Keeps GDAL from printing: its errors are collected and turned into IoError messages.
+class QuietGdal {
+ public:
+  QuietGdal() {
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    CPLErrorReset();
+  }
+  ~QuietGdal() { CPLPopErrorHandler(); }
+  QuietGdal(const QuietGdal&) = delete;
+  QuietGdal& operator=(const QuietGdal&) = delete;
+  static std::string Last() {
+    const char* msg = CPLGetLastErrorMsg();
+    return (msg != nullptr && *msg != '\0') ? std::string(" (") + msg + ")" : std::string();
+  }
+};
+
+[[noreturn]] void Fail(const std::filesystem::path& path, const std::string& what) {
+  throw IoError(path.string() + ": " + what + QuietGdal::Last());
+}
+
+std::filesystem::path TempPath(const std::filesystem::path& path) {
+  std::random_device device;
+  std::filesystem::path temp = path;
+  temp += ".tmp-" + std::to_string(device() % 1000000000u) + ".tif";
+  return temp;
+}
+
+}  // namespace
+
+GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::ElevationMap& map,
+                            const Georeference& georef, const GeoTiffOptions& options) {
+  if (std::abs(map.options().grid_rotation_rad - georef.convergence_rad()) > 1e-9) {
+    throw std::invalid_argument(
+        "WriteDemGeoTiff: the map's grid_rotation_rad must equal the georeference's "
+        "convergence_rad() so that the raster is north-up without resampling");
+  }
+  if (path.empty() || !path.has_filename()) throw IoError(path.string() + ": not a file path");
+  RegisterGdal();
+  QuietGdal quiet;
+
+  // Extent in grid cells; rows run north to south.
+  dem::CellIndex min{0, 0};
+  dem::CellIndex max{0, 0};
+  if (!map.bounds().Empty()) {
+    min = map.bounds().Min();
+    max = map.bounds().Max();
+  }
+  const std::int64_t width64 = max.x - min.x + 1;
+  const std::int64_t height64 = max.y - min.y + 1;
+  if (width64 * height64 > (std::int64_t{1} << 31) || width64 > (1 << 30) || height64 > (1 << 30)) {
+    throw IoError(path.string() + ": raster of " + std::to_string(width64) + " x " +
+                  std::to_string(height64) + " cells is too large");
+  }
+  GeoTiffInfo info;
+  info.width = static_cast<int>(width64);
+  info.height = static_cast<int>(height64);
+  const auto pixels = static_cast<std::size_t>(width64) * static_cast<std::size_t>(height64);
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> elevation(pixels, kNaN);
+  std::vector<float> stddev(pixels, kNaN);
+  std::vector<float> count(pixels, 0.0f);
+
+  // Copy tile rows straight into the raster.
+  const dem::GridIndex& index = map.index();
+  const int n = index.geometry().tile_cells;
+  for (const dem::TileIndex t : map.TileIndices()) {
+    const dem::Tile* tile = map.FindTile(t);
+    if (tile == nullptr || tile->filled == 0) continue;
+    for (int ly = 0; ly < n; ++ly) {
+      const dem::CellIndex row_start = index.TileLocalToCell(t, {0, ly});
+      if (row_start.y < min.y || row_start.y > max.y) continue;
+      const auto row = static_cast<std::size_t>(max.y - row_start.y);
+      for (int lx = 0; lx < n; ++lx) {
+        const std::size_t i = index.LinearIndex({lx, ly});
+        const dem::CellValue& v = tile->cells[i].value;
+        if (v.count == 0) continue;
+        const std::int64_t cx = row_start.x + lx;
+        if (cx < min.x || cx > max.x) continue;
+        const std::size_t o =
+            row * static_cast<std::size_t>(width64) + static_cast<std::size_t>(cx - min.x);
+        elevation[o] = v.elevation_m;
+        stddev[o] = std::sqrt(std::max(0.0f, v.variance_m2));
+        count[o] = static_cast<float>(v.count);
+        ++info.valid_cells;
+      }
+    }
+  }
+
+  const double s = index.geometry().cell_size_m;
+  const double k = georef.scale_factor();
+  const Eigen::Vector2d top_left =
+      georef.GridToProjected({static_cast<double>(min.x) * s, static_cast<double>(max.y + 1) * s});
+  info.geotransform = {top_left.x(), k * s, 0.0, top_left.y(), 0.0, -k * s};
+
+  GDALDriver* mem_driver = GetGDALDriverManager()->GetDriverByName("MEM");
+  GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
+  if (mem_driver == nullptr || cog_driver == nullptr)
+    Fail(path, "GDAL lacks the MEM or COG driver");
+  DatasetPtr mem(mem_driver->Create("", info.width, info.height, 3, GDT_Float32, nullptr));
+  if (!mem) Fail(path, "cannot create the in-memory raster");
+  mem->SetGeoTransform(info.geotransform.data());
+  if (mem->SetProjection(georef.wkt().c_str()) != CE_None) Fail(path, "cannot set the CRS");
+  mem->SetMetadataItem("ELEVATION_DATUM",
+                       ("height above the origin altitude " +
+                        std::to_string(georef.origin().altitude_m) + " m (world z, ENU up)")
+                           .c_str());
+  mem->SetMetadataItem("ORIGIN_LAT_LON", (std::to_string(georef.origin().latitude_deg) + " " +
+                                          std::to_string(georef.origin().longitude_deg))
+                                             .c_str());
+  struct BandSpec {
+    std::vector<float>* data;
+    const char* name;
+    const char* unit;
+  };
+  const BandSpec bands[3] = {
+      {&elevation, "elevation", "m"}, {&stddev, "elevation_stddev", "m"}, {&count, "count", ""}};
+  for (int b = 0; b < 3; ++b) {
+    GDALRasterBand* band = mem->GetRasterBand(b + 1);
+    band->SetDescription(bands[b].name);
+    if (*bands[b].unit != '\0') band->SetUnitType(bands[b].unit);
+    band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
+    if (band->RasterIO(GF_Write, 0, 0, info.width, info.height, bands[b].data->data(), info.width,
+                       info.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
+      Fail(path, "cannot fill band " + std::to_string(b + 1));
+    }
+  }
+
+  char** create = nullptr;
+  create = CSLSetNameValue(create, "COMPRESS", "DEFLATE");
+  create = CSLSetNameValue(create, "PREDICTOR", "FLOATING_POINT");
+  create = CSLSetNameValue(create, "LEVEL", std::to_string(options.deflate_level).c_str());
+  create = CSLSetNameValue(create, "BLOCKSIZE", std::to_string(options.block_size).c_str());
+  create = CSLSetNameValue(create, "OVERVIEWS", options.overviews ? "AUTO" : "NONE");
+  create = CSLSetNameValue(create, "RESAMPLING", "AVERAGE");
+  create =
+      CSLSetNameValue(create, "NUM_THREADS",
+                      options.threads > 0 ? std::to_string(options.threads).c_str() : "ALL_CPUS");
+  const std::filesystem::path temp = TempPath(path);
+  GDALDataset* out =
+      cog_driver->CreateCopy(temp.c_str(), mem.get(), FALSE, create, nullptr, nullptr);
+  CSLDestroy(create);
+  if (out == nullptr) {
+    ::unlink(temp.c_str());
+    Fail(path, "GDAL cannot write the GeoTIFF");
+  }
+  CPLErrorReset();
+  GDALClose(GDALDataset::ToHandle(out));  // returns void in GDAL 3.6: check the error state
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    ::unlink(temp.c_str());
+    Fail(path, "GDAL cannot finish the GeoTIFF");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    ::unlink(temp.c_str());
+    throw IoError(path.string() + ": cannot rename temporary file into place (" + ec.message() +
+                  ")");
+  }
+  return info;
+}
+
+float DemRaster::ElevationAt(int col, int row) const {
+  if (col < 0 || row < 0 || col >= width || row >= height) {
+    return std::numeric_limits<float>::quiet_NaN();
+  }
+  return elevation_m[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) +
+                     static_cast<std::size_t>(col)];
+}
+
+DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
+  RegisterGdal();
+  QuietGdal quiet;
+  DatasetPtr ds(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+  if (!ds) Fail(path, "cannot open as a raster");
+  DemRaster raster;
+  raster.width = ds->GetRasterXSize();
+  raster.height = ds->GetRasterYSize();
+  if (ds->GetGeoTransform(raster.geotransform.data()) != CE_None) {
+    Fail(path, "has no geotransform");
+  }
+  if (const char* wkt = ds->GetProjectionRef(); wkt != nullptr) raster.wkt = wkt;
+  if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs != nullptr) {
+    const char* code = srs->GetAuthorityCode(nullptr);
+    const char* name = srs->GetAuthorityName(nullptr);
+    if (code != nullptr && name != nullptr && std::string(name) == "EPSG") {
+      raster.epsg = std::atoi(code);
+    }
+  }
+  const auto pixels =
+      static_cast<std::size_t>(raster.width) * static_cast<std::size_t>(raster.height);
+  std::vector<float>* targets[3] = {&raster.elevation_m, &raster.stddev_m, &raster.count};
+  const int bands = std::min(3, ds->GetRasterCount());
+  if (bands < 1) Fail(path, "has no raster band");
+  if (const char* v = ds->GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE")) raster.layout = v;
+  if (const char* v = ds->GetMetadataItem("COMPRESSION", "IMAGE_STRUCTURE")) {
+    raster.compression = v;
+  }
+  if (const char* v = ds->GetMetadataItem("PREDICTOR", "IMAGE_STRUCTURE")) raster.predictor = v;
+  raster.overview_count = ds->GetRasterBand(1) ? ds->GetRasterBand(1)->GetOverviewCount() : 0;
+  for (int b = 0; b < ds->GetRasterCount(); ++b) {
+    GDALRasterBand* band = ds->GetRasterBand(b + 1);
+    raster.band_types.emplace_back(GDALGetDataTypeName(band->GetRasterDataType()));
+    raster.band_descriptions.emplace_back(band->GetDescription());
+    int has = 0;
+    raster.nodata.push_back(band->GetNoDataValue(&has));
+    raster.has_nodata.push_back(has != 0);
+  }
+  for (int b = 0; b < bands; ++b) {
+    targets[b]->resize(pixels);
+    if (ds->GetRasterBand(b + 1)->RasterIO(GF_Read, 0, 0, raster.width, raster.height,
+                                           targets[b]->data(), raster.width, raster.height,
+                                           GDT_Float32, 0, 0, nullptr) != CE_None) {
+      Fail(path, "cannot read band " + std::to_string(b + 1));
+    }
+  }
+  return raster;
+}
+
+}  // namespace rovermap::io

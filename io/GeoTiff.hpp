@@ -1,0 +1,70 @@
+#pragma once
+// dem.tif (DESIGN §6): a Cloud-Optimized GeoTIFF, Float32, north-up; band 1 elevation [m],
+// band 2 elevation standard deviation [m], band 3 point count; nodata NaN; CRS and
+// geotransform from io::Georeference. Written through GDAL: a MEM dataset, then CreateCopy
+// with the COG driver (DEFLATE, floating-point predictor, overviews) to a temporary file in
+// the same directory, renamed into place.
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "dem/ElevationMap.hpp"
+#include "io/Georeference.hpp"
+
+namespace rovermap::io {
+
+/// Options of the GeoTIFF writer.
+struct GeoTiffOptions {
+  int block_size = 512;   ///< [px] COG tile edge (power of two, 64..4096)
+  bool overviews = true;  ///< build overviews (COG OVERVIEWS=AUTO) or none
+  int deflate_level = 1;  ///< [1..9] DEFLATE effort (1: 3x faster than 6, 4 % larger)
+  int threads = 0;        ///< [count] GDAL compression threads; 0 = all cores
+};
+
+/// What was written.
+struct GeoTiffInfo {
+  int width = 0;                         ///< [px] columns (west to east)
+  int height = 0;                        ///< [px] rows (north to south)
+  std::array<double, 6> geotransform{};  ///< GDAL order: E0, dE/dcol, 0, N0, 0, dN/drow (< 0)
+  std::size_t valid_cells = 0;           ///< pixels with data
+};
+
+/// Writes `map` as dem.tif to `path` atomically. The raster covers the map's cell bounds; an
+/// empty map gives one NaN pixel at the origin.
+/// @throw std::invalid_argument if the map's grid_rotation_rad differs from
+///        georef.convergence_rad() by more than 1e-9 rad (the grid would not be north-up).
+/// @throw IoError naming `path` if GDAL cannot write it, the raster would exceed 2^31 pixels,
+///        or the rename fails; no file is left behind.
+GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::ElevationMap& map,
+                            const Georeference& georef, const GeoTiffOptions& options = {});
+
+/// A DEM GeoTIFF read back (row-major, row 0 = north, as stored).
+struct DemRaster {
+  int width = 0;
+  int height = 0;
+  std::array<double, 6> geotransform{};
+  std::string wkt;                             ///< the CRS as WKT
+  int epsg = 0;                                ///< when the CRS has an EPSG code, else 0
+  std::vector<float> elevation_m;              ///< band 1
+  std::vector<float> stddev_m;                 ///< band 2 (empty if the file has one band)
+  std::vector<float> count;                    ///< band 3 (empty if absent)
+  std::vector<std::string> band_types;         ///< GDAL data type name per band ("Float32")
+  std::vector<std::string> band_descriptions;  ///< per band ("elevation", ...)
+  std::vector<double> nodata;                  ///< per band; NaN when nodata is NaN
+  std::vector<bool> has_nodata;                ///< per band
+  std::string layout;       ///< IMAGE_STRUCTURE LAYOUT metadata ("COG" for a COG), else ""
+  std::string compression;  ///< IMAGE_STRUCTURE COMPRESSION ("DEFLATE"), else ""
+  std::string predictor;    ///< IMAGE_STRUCTURE PREDICTOR ("3": floating point), else ""
+  int overview_count = 0;   ///< overviews of band 1
+  /// Band 1 at (col, row); NaN outside.
+  float ElevationAt(int col, int row) const;
+};
+
+/// Reads a GeoTIFF written by WriteDemGeoTiff (or any 1..3-band raster: band 1 elevation).
+/// @throw IoError naming `path` if it cannot be opened or read.
+DemRaster ReadDemGeoTiff(const std::filesystem::path& path);
+
+}  // namespace rovermap::io

@@ -1,0 +1,190 @@
+#include "io/MapPreview.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "io/FileUtil.hpp"
+#include "io/IoError.hpp"
+
+namespace rovermap::io {
+namespace {
+
+const cv::Scalar kBackground(255, 255, 255);
+const cv::Scalar kText(30, 30, 30);
+
+// 1, 2 or 5 times a power of ten, at most `value`.
+double NiceBelow(double value) {
+  const double p = std::pow(10.0, std::floor(std::log10(value)));
+  for (double m : {5.0, 2.0, 1.0}) {
+    if (m * p <= value) return m * p;
+  }
+  return p;
+}
+
+std::string Format(double value, double step) {
+  char buffer[32];
+  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step)));
+  if (std::abs(value) < 1e-6 * step) value = 0.0;  // no "-0.0"
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+  return buffer;
+}
+
+}  // namespace
+
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<Eigen::Vector3d>& trajectory_world,
+                     const MapPreviewOptions& options) {
+  const auto encode_and_write = [&path](const cv::Mat& image) {
+    std::vector<unsigned char> png;
+    bool ok = false;
+    try {
+      ok = cv::imencode(".png", image, png);
+    } catch (const cv::Exception& e) {
+      throw IoError(path.string() + ": cannot encode PNG (" + e.what() + ")");
+    }
+    if (!ok) throw IoError(path.string() + ": cannot encode PNG");
+    WriteFileAtomically(path,
+                        std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+  };
+  if (map.bounds().Empty() || map.CellCount() == 0) {
+    cv::Mat image(120, 320, CV_8UC3, kBackground);
+    cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
+    encode_and_write(image);
+    return;
+  }
+
+  // Raster of the map, decimated by `step` cells per pixel (the cell nearest each pixel).
+  const dem::CellIndex lo = map.bounds().Min();
+  const dem::CellIndex hi = map.bounds().Max();
+  const std::int64_t cols_cells = hi.x - lo.x + 1;
+  const std::int64_t rows_cells = hi.y - lo.y + 1;
+  const std::int64_t step =
+      std::max<std::int64_t>(1, (std::max(cols_cells, rows_cells) + options.max_map_px - 1) /
+                                    std::max(1, options.max_map_px));
+  const int w = static_cast<int>((cols_cells + step - 1) / step);
+  const int h = static_cast<int>((rows_cells + step - 1) / step);
+  cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  float z_min = std::numeric_limits<float>::infinity();
+  float z_max = -z_min;
+  map.ForEachCell([&](dem::CellIndex c, const dem::CellValue& v) {
+    const int col = static_cast<int>((c.x - lo.x) / step);
+    const int row = static_cast<int>((hi.y - c.y) / step);
+    float& px = height.at<float>(row, col);
+    px = std::isnan(px) ? v.elevation_m : std::max(px, v.elevation_m);
+    z_min = std::min(z_min, v.elevation_m);
+    z_max = std::max(z_max, v.elevation_m);
+  });
+  const double pixel_m = map.options().cell_size_m * static_cast<double>(step);
+  if (!(z_max > z_min)) z_max = z_min + 1.0f;
+
+  // Hillshade (Horn-like central differences) and colour.
+  const double az = options.sun_azimuth_deg * M_PI / 180.0;
+  const double el = options.sun_elevation_deg * M_PI / 180.0;
+  const Eigen::Vector3d sun(std::sin(az) * std::cos(el), std::cos(az) * std::cos(el), std::sin(el));
+  cv::Mat normalized(h, w, CV_8U);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const float z = height.at<float>(r, c);
+      normalized.at<unsigned char>(r, c) =
+          std::isnan(z) ? 0 : static_cast<unsigned char>(255.0f * (z - z_min) / (z_max - z_min));
+    }
+  }
+  cv::Mat colour;
+  cv::applyColorMap(normalized, colour, cv::COLORMAP_TURBO);
+  const auto at = [&](int r, int c, float fallback) {
+    if (r < 0 || c < 0 || r >= h || c >= w) return fallback;
+    const float z = height.at<float>(r, c);
+    return std::isnan(z) ? fallback : z;
+  };
+  cv::Mat map_image(h, w, CV_8UC3, kBackground);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const float z = height.at<float>(r, c);
+      if (std::isnan(z)) continue;
+      const double dzdx = (at(r, c + 1, z) - at(r, c - 1, z)) / (2.0 * pixel_m);
+      const double dzdy = (at(r - 1, c, z) - at(r + 1, c, z)) / (2.0 * pixel_m);  // row 0 north
+      const Eigen::Vector3d normal = Eigen::Vector3d(-dzdx, -dzdy, 1.0).normalized();
+      const double shade = std::max(0.0, normal.dot(sun));
+      const double f = (1.0 - options.hillshade_weight) + options.hillshade_weight * shade;
+      const cv::Vec3b in = colour.at<cv::Vec3b>(r, c);
+      map_image.at<cv::Vec3b>(r, c) =
+          cv::Vec3b(cv::saturate_cast<uchar>(in[0] * f), cv::saturate_cast<uchar>(in[1] * f),
+                    cv::saturate_cast<uchar>(in[2] * f));
+    }
+  }
+
+  // Upscale small maps so the annotations stay legible.
+  const int zoom = std::max(1, 600 / std::max(w, h));
+  if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
+  const double px_per_m = zoom / pixel_m;
+
+  // Trajectory in grid pixels.
+  if (!trajectory_world.empty()) {
+    std::vector<cv::Point> line;
+    for (const Eigen::Vector3d& p : trajectory_world) {
+      if (!p.allFinite()) continue;
+      const Eigen::Vector2d g = map.WorldToGrid(p.x(), p.y());
+      const double gx = g.x() / map.options().cell_size_m - static_cast<double>(lo.x);
+      const double gy = static_cast<double>(hi.y + 1) - g.y() / map.options().cell_size_m;
+      line.emplace_back(static_cast<int>(std::lround(gx / step * zoom)),
+                        static_cast<int>(std::lround(gy / step * zoom)));
+    }
+    if (!line.empty()) {
+      cv::polylines(map_image, line, false, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
+      cv::polylines(map_image, line, false, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+      cv::circle(map_image, line.front(), 5, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
+      cv::circle(map_image, line.front(), 3, cv::Scalar(255, 255, 255), cv::FILLED, cv::LINE_AA);
+    }
+  }
+
+  // Canvas: map, colour bar on the right, scale bar and north arrow below.
+  const int margin = 20;
+  const int bar_w = 20;
+  const int legend_w = 110;
+  const int bottom = 50;
+  const int bar_h = std::max(100, map_image.rows);
+  cv::Mat canvas(std::max(map_image.rows, bar_h + 20) + 2 * margin + bottom,
+                 map_image.cols + 2 * margin + legend_w, CV_8UC3, kBackground);
+  map_image.copyTo(canvas(cv::Rect(margin, margin, map_image.cols, map_image.rows)));
+  cv::rectangle(canvas, cv::Rect(margin - 1, margin - 1, map_image.cols + 2, map_image.rows + 2),
+                kText, 1);
+
+  const int bar_x = margin * 2 + map_image.cols;
+  const int bar_top = margin;
+  for (int i = 0; i < bar_h; ++i) {
+    cv::Mat one(1, 1, CV_8U, cv::Scalar(255 - 255 * i / std::max(1, bar_h - 1)));
+    cv::Mat rgb;
+    cv::applyColorMap(one, rgb, cv::COLORMAP_TURBO);
+    const cv::Vec3b c = rgb.at<cv::Vec3b>(0, 0);
+    cv::line(canvas, {bar_x, bar_top + i}, {bar_x + bar_w, bar_top + i}, cv::Scalar(c), 1);
+  }
+  const double range = z_max - z_min;
+  const double tick = NiceBelow(range / 4.0);
+  for (double v = std::ceil(z_min / tick) * tick; v <= z_max + 1e-9; v += tick) {
+    const int y = bar_top + static_cast<int>((z_max - v) / range * (bar_h - 1));
+    cv::line(canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kText, 1);
+    cv::putText(canvas, Format(v, tick), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                kText, 1, cv::LINE_AA);
+  }
+  cv::putText(canvas, "m", {bar_x, bar_top + bar_h + 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
+              cv::LINE_AA);
+
+  const double bar_m = NiceBelow(map_image.cols / px_per_m / 4.0);
+  const int bar_px = static_cast<int>(std::lround(bar_m * px_per_m));
+  const int sy = canvas.rows - bottom + 10;
+  cv::rectangle(canvas, cv::Rect(margin, sy - 5, bar_px, 6), kText, cv::FILLED);
+  cv::putText(canvas, Format(bar_m, bar_m) + " m", {margin + bar_px + 8, sy + 2},
+              cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
+  const int nx = margin + map_image.cols - 10;
+  cv::arrowedLine(canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
+  cv::putText(canvas, "N", {nx - 24, sy + 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
+  encode_and_write(canvas);
+}
+
+}  // namespace rovermap::io

@@ -1,0 +1,30 @@
+#pragma once
+// dem.png (DESIGN §6): hillshade blended with a colour map of elevation, a colour bar in
+// metres, a scale bar, and the trajectory. Drawn in the map's grid frame, north up (the same
+// orientation as dem.tif).
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <vector>
+
+#include "dem/ElevationMap.hpp"
+
+namespace rovermap::io {
+
+/// Options of the preview.
+struct MapPreviewOptions {
+  int max_map_px = 1200;            ///< [px] longest edge of the map part; larger maps decimated
+  double sun_azimuth_deg = 315.0;   ///< [deg] clockwise from grid north (GIS default: north-west)
+  double sun_elevation_deg = 45.0;  ///< [deg] above the horizon
+  double hillshade_weight = 0.5;    ///< [ratio] 0 = colour only, 1 = shade only
+};
+
+/// Renders `map` and writes it to `path` (PNG) atomically. `trajectory_world` (world x, y [m];
+/// z ignored) is drawn in white with a black outline when not empty; the start is marked.
+/// An empty map gives a small "no data" image.
+/// @throw IoError naming `path` if encoding or writing fails.
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<Eigen::Vector3d>& trajectory_world = {},
+                     const MapPreviewOptions& options = {});
+
+}  // namespace rovermap::io

@@ -1,0 +1,202 @@
+#include "io/Sequence.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <system_error>
+
+#include "config/ConfigError.hpp"
+#include "config/SequenceYaml.hpp"
+#include "io/IoError.hpp"
+#include "io/PointCloudIo.hpp"
+
+namespace rovermap::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// What frames/ holds for one index.
+struct FrameFiles {
+  bool left = false;
+  bool right = false;
+  bool ply = false;
+};
+
+// "000042.left.png" -> 42 and the kind; false for names that are not frame files.
+bool ParseFrameName(const std::string& name, std::size_t* index, std::string* kind) {
+  const auto dot = name.find('.');
+  if (dot == 0 || dot == std::string::npos || dot > 12) return false;
+  for (std::size_t i = 0; i < dot; ++i) {
+    if (name[i] < '0' || name[i] > '9') return false;
+  }
+  const std::string rest = name.substr(dot + 1);
+  if (rest != "left.png" && rest != "right.png" && rest != "ply") return false;
+  *index = std::stoul(name.substr(0, dot));
+  *kind = rest;
+  return true;
+}
+
+cv::Mat ReadGrey(const fs::path& file, const CameraModel& camera) {
+  const cv::Mat image = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+  if (image.empty()) throw IoError(file.string() + ": cannot read or decode the image");
+  if (image.cols != camera.width || image.rows != camera.height) {
+    throw IoError(file.string() + ": image is " + std::to_string(image.cols) + "x" +
+                  std::to_string(image.rows) + ", sequence.yaml camera is " +
+                  std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  }
+  return image;
+}
+
+}  // namespace
+
+std::string FrameStem(std::size_t index) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%06zu", index);
+  return buffer;
+}
+
+SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
+  config::SequenceYaml yaml;
+  try {
+    yaml = config::ReadSequenceYaml(sequence_dir / "sequence.yaml");
+  } catch (const config::ConfigError& e) {
+    throw IoError(e.what());  // bad input data, not a bad command line
+  }
+  SequenceInfo info;
+  info.directory = sequence_dir;
+  info.sensor_type = yaml.sensor_type == "cloud" ? SensorType::kCloud : SensorType::kStereo;
+  if (yaml.camera) {
+    const config::SequenceCamera& c = *yaml.camera;
+    info.camera = CameraModel{c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.baseline};
+  }
+  info.T_body_sensor.translation() =
+      Eigen::Vector3d(yaml.translation[0], yaml.translation[1], yaml.translation[2]);
+  if (yaml.rotation_rpy_deg) {
+    const auto& rpy = *yaml.rotation_rpy_deg;
+    info.T_body_sensor.linear() = (Eigen::AngleAxisd(rpy[2] * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(rpy[1] * kDegToRad, Eigen::Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(rpy[0] * kDegToRad, Eigen::Vector3d::UnitX()))
+                                      .toRotationMatrix();
+  } else {
+    const auto& q = *yaml.quaternion_xyzw;
+    info.T_body_sensor.linear() =
+        Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+  }
+  info.origin = {yaml.latitude_deg, yaml.longitude_deg, yaml.altitude_m};
+  info.frame_rate_hz = yaml.frame_rate_hz;
+  info.body = yaml.body;
+  return info;
+}
+
+SequenceReader::SequenceReader(const fs::path& sequence_dir) {
+  std::error_code error;
+  if (!fs::is_directory(sequence_dir, error)) {
+    throw IoError(sequence_dir.string() + ": not a sequence directory (no such directory)");
+  }
+  info_ = ReadSequenceInfo(sequence_dir);
+
+  const fs::path odometry_file = sequence_dir / "odometry.tum";
+  if (!fs::is_regular_file(odometry_file, error)) {
+    throw IoError(odometry_file.string() + ": missing (one dead-reckoning pose per frame)");
+  }
+  odometry_ = ReadTum(odometry_file);
+  if (odometry_.empty()) throw IoError(odometry_file.string() + ": no poses");
+
+  const fs::path truth_file = sequence_dir / "groundtruth.tum";
+  if (fs::exists(truth_file, error)) {
+    groundtruth_ = ReadTum(truth_file);
+    if (groundtruth_.size() != odometry_.size()) {
+      throw IoError(truth_file.string() + ": " + std::to_string(groundtruth_.size()) +
+                    " poses, but odometry.tum has " + std::to_string(odometry_.size()));
+    }
+    for (std::size_t i = 0; i < odometry_.size(); ++i) {
+      if (std::abs(groundtruth_[i].timestamp - odometry_[i].timestamp) > 1e-6) {
+        throw IoError(truth_file.string() + ":" + std::to_string(groundtruth_[i].line) +
+                      ": timestamp " + std::to_string(groundtruth_[i].timestamp) +
+                      " does not match odometry.tum:" + std::to_string(odometry_[i].line) + " (" +
+                      std::to_string(odometry_[i].timestamp) + ") for frame " + std::to_string(i));
+      }
+    }
+  }
+
+  // One listing of frames/ (names only) against the poses.
+  const fs::path frames_dir = sequence_dir / "frames";
+  if (!fs::is_directory(frames_dir, error)) {
+    throw IoError(frames_dir.string() + ": missing frames directory");
+  }
+  const bool stereo = info_.sensor_type == SensorType::kStereo;
+  std::map<std::size_t, FrameFiles> found;
+  for (const fs::directory_entry& entry : fs::directory_iterator(frames_dir)) {
+    const std::string name = entry.path().filename().string();
+    std::size_t index = 0;
+    std::string kind;
+    if (!ParseFrameName(name, &index, &kind)) continue;  // other files are not ours
+    if (name.compare(0, name.find('.'), FrameStem(index)) != 0) {
+      throw IoError(entry.path().string() + ": frame files are named " + FrameStem(index) + "." +
+                    kind + " (six or more digits, zero-padded)");
+    }
+    if (stereo == (kind == "ply")) {
+      throw IoError(entry.path().string() + ": a " + (stereo ? "cloud" : "stereo") +
+                    " frame in a sequence with sensor.type: " + (stereo ? "stereo" : "cloud"));
+    }
+    if (index >= odometry_.size()) {
+      throw IoError(entry.path().string() + ": frame " + std::to_string(index) +
+                    " has no pose: odometry.tum has " + std::to_string(odometry_.size()) +
+                    " lines (frames 0.." + std::to_string(odometry_.size() - 1) + ")");
+    }
+    FrameFiles& files = found[index];
+    if (kind == "left.png") files.left = true;
+    if (kind == "right.png") files.right = true;
+    if (kind == "ply") files.ply = true;
+  }
+  for (std::size_t i = 0; i < odometry_.size(); ++i) {
+    const auto it = found.find(i);
+    const FrameFiles files = it == found.end() ? FrameFiles{} : it->second;
+    const fs::path stem = frames_dir / FrameStem(i);
+    std::string missing;
+    if (stereo && !files.left) missing = stem.string() + ".left.png";
+    if (stereo && files.left && !files.right) missing = stem.string() + ".right.png";
+    if (!stereo && !files.ply) missing = stem.string() + ".ply";
+    if (!missing.empty()) {
+      throw IoError(
+          missing + ": missing frame file (odometry.tum:" + std::to_string(odometry_[i].line) +
+          " has a pose for frame " + std::to_string(i) + "; " + std::to_string(found.size()) +
+          " of " + std::to_string(odometry_.size()) + " frames present)");
+    }
+  }
+}
+
+Frame SequenceReader::Read(std::size_t index) const {
+  if (index >= odometry_.size()) {
+    throw std::out_of_range("SequenceReader::Read: frame " + std::to_string(index) + " of " +
+                            std::to_string(odometry_.size()));
+  }
+  Frame frame;
+  frame.index = index;
+  frame.timestamp = odometry_[index].timestamp;
+  frame.T_world_body_odom = odometry_[index].T_world_body;
+  if (!groundtruth_.empty()) frame.T_world_body_truth = groundtruth_[index].T_world_body;
+  const fs::path stem = info_.directory / "frames" / FrameStem(index);
+  if (info_.sensor_type == SensorType::kStereo) {
+    frame.file = stem.string() + ".left.png";
+    frame.left = ReadGrey(frame.file, *info_.camera);
+    frame.right = ReadGrey(stem.string() + ".right.png", *info_.camera);
+  } else {
+    frame.file = stem.string() + ".ply";
+    frame.cloud = ReadPly(frame.file);
+  }
+  return frame;
+}
+
+bool SequenceReader::Next(Frame* frame) {
+  if (next_ >= odometry_.size()) return false;
+  const std::size_t index = next_++;
+  *frame = Read(index);
+  return true;
+}
+
+}  // namespace rovermap::io

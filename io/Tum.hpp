@@ -1,0 +1,28 @@
+#pragma once
+// TUM trajectory files: `timestamp tx ty tz qx qy qz qw` (DESIGN.md §3, §4).
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <vector>
+
+namespace rovermap::io {
+
+/// One pose of a trajectory: T_world_body at `timestamp`.
+struct StampedPose {
+  double timestamp = 0.0;  ///< [s]
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  int line = 0;  ///< 1-based line in the file it was read from (0 if not read)
+};
+
+/// Reads a TUM file: 8 space/tab separated numbers per line, `#` comments (whole line or
+/// trailing), blank lines ignored, LF or CRLF.
+/// @throw IoError "FILE:LINE: reason" if the file is missing or unreadable, a line does not have
+///        exactly 8 finite numbers, a quaternion's norm differs from 1 by more than 1e-3, or the
+///        timestamps are not strictly increasing. An empty file gives an empty vector.
+std::vector<StampedPose> ReadTum(const std::filesystem::path& path);
+
+/// Writes a TUM file (full double precision, quaternions normalised, qw >= 0), atomically.
+/// @throw IoError if it cannot be written.
+void WriteTum(const std::filesystem::path& path, const std::vector<StampedPose>& poses);
+
+}  // namespace rovermap::io

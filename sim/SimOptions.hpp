@@ -1,0 +1,68 @@
+#pragma once
+// Options of the sequence simulator behind `rovermap simulate` (config keys under `sim.`).
+
+namespace rovermap::sim {
+
+enum class PathShape { kStraight, kCurves, kLoop };
+enum class SensorKind { kStereo, kCloud };
+
+struct SimOptions {
+  int seed = 1;     ///< everything random derives from it (deterministic output)
+  int frames = 30;  ///< frames in the sequence [count]
+  double frame_rate_hz = 2.0;
+  double speed_m_s = 0.3;  ///< rover ground speed
+
+  double origin_latitude_deg = 46.5191;  ///< geodetic origin written to sequence.yaml
+  double origin_longitude_deg = 6.5668;
+  double origin_altitude_m = 400.0;
+
+  // Terrain: a square heightfield centred on the world origin.
+  double terrain_size_m = 40.0;       ///< edge of the square
+  double terrain_cell_m = 0.04;       ///< heightfield sample spacing
+  double relief_m = 0.6;              ///< amplitude of the fractal relief (largest octave)
+  double relief_wavelength_m = 10.0;  ///< wavelength of the largest octave
+  int octaves = 7;                    ///< fractal noise octaves (each half the wavelength)
+  double roughness = 0.5;             ///< amplitude ratio between octaves (persistence)
+  double slope_x_deg = 2.0;           ///< regional slope rising towards +x (east)
+  double slope_y_deg = 0.0;           ///< regional slope rising towards +y (north)
+  int craters = 15;                   ///< crater count
+  double crater_max_radius_m = 3.0;
+  int rocks = 400;  ///< rock count
+  double rock_max_radius_m = 0.3;
+  double keep_out_m = 1.0;  ///< no rocks within this distance of the rover path
+
+  // Rover and path.
+  PathShape path = PathShape::kCurves;
+  double turn_radius_m = 6.0;  ///< loop radius / tightest curve radius
+  double wheelbase_m = 0.6;    ///< front-back wheel distance (pitch from the terrain)
+  double track_m = 0.5;        ///< left-right wheel distance (roll from the terrain)
+
+  // Mast stereo camera (defaults: a small rover's navigation cameras).
+  SensorKind sensor = SensorKind::kStereo;
+  double mast_height_m = 1.0;     ///< left camera above the body origin
+  double mast_forward_m = 0.2;    ///< left camera ahead of the body origin
+  double camera_tilt_deg = 30.0;  ///< optical axis below the horizontal
+  double baseline_m = 0.2;
+  double focal_px = 300.0;
+  int image_width = 480;
+  int image_height = 360;
+  double sun_elevation_deg = 40.0;
+  double sun_azimuth_deg = 135.0;  ///< from east, counter-clockwise
+  double image_noise = 2.0;        ///< sensor noise σ [grey levels]
+  double max_range_m = 20.0;       ///< rays longer than this see sky
+
+  // Cloud mode: ray-cast points with the stereo error model.
+  int cloud_stride_px = 4;  ///< one point per stride × stride pixels
+  double disparity_sigma_px = 0.2;
+  double pixel_sigma_px = 0.3;
+  double outlier_fraction = 0.01;  ///< points moved to a random depth on their ray
+
+  // Dead reckoning.
+  double odom_scale_error = 0.02;              ///< wheel odometry distance scale error (ratio)
+  double odom_slip_mean = 0.01;                ///< mean extra wheel travel from slip (ratio)
+  double odom_slip_sigma = 0.02;               ///< per-step slip σ (ratio)
+  double heading_bias_deg_s = 0.05;            ///< heading-rate bias
+  double heading_random_walk_deg_rt_s = 0.05;  ///< heading random walk [deg/√s]
+};
+
+}  // namespace rovermap::sim

@@ -1,0 +1,85 @@
+#pragma once
+// The sequence simulator: a rover driving over a synthetic terrain (sim/Terrain), its mast
+// stereo camera rendered by ray casting (or points with the stereo error model), and dead
+// reckoning with configurable errors. Writes a sequence directory (DESIGN.md §4).
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "io/Sequence.hpp"
+#include "io/Tum.hpp"
+#include "registration/PointCloud.hpp"
+#include "sim/SimOptions.hpp"
+#include "sim/Terrain.hpp"
+
+namespace rovermap::sim {
+
+/// What WriteSequence produced.
+struct SimulateResult {
+  std::size_t frames = 0;
+  double path_length_m = 0.0;            ///< true distance travelled
+  double final_odometry_error_m = 0.0;   ///< ‖t_odom − t_true‖ at the last frame
+  double final_heading_error_deg = 0.0;  ///< odometry yaw − true yaw at the last frame
+  std::size_t points = 0;                ///< cloud mode: points written
+  std::size_t outliers = 0;              ///< cloud mode: outliers among them
+  double render_ms = 0.0;                ///< total time spent rendering frames
+};
+
+/// Cloud of one frame with its bookkeeping.
+struct SimCloud {
+  registration::PointCloud cloud;  ///< sensor frame, with true normals and model covariances
+  std::size_t outliers = 0;
+};
+
+class Simulator {
+ public:
+  /// Builds the path, terrain, true poses and dead reckoning (cheap; no rendering).
+  /// @throw std::invalid_argument if an option is out of range (config/ validates the same).
+  explicit Simulator(const SimOptions& options);
+
+  const SimOptions& options() const { return options_; }
+  const Terrain& terrain() const { return terrain_; }
+  /// True body poses T_world_body, one per frame.
+  const std::vector<io::StampedPose>& truth() const { return truth_; }
+  /// Dead-reckoning poses (same timestamps), starting at the true first pose.
+  const std::vector<io::StampedPose>& odometry() const { return odometry_; }
+  const Eigen::Isometry3d& T_body_sensor() const { return T_body_sensor_; }
+  io::CameraModel camera() const;
+
+  /// Rectified 8-bit grey pair of frame `index` (left camera = sensor frame, right camera
+  /// baseline_m along its x axis). Deterministic for (seed, index).
+  void RenderStereo(std::size_t index, cv::Mat* left, cv::Mat* right) const;
+  /// Points of frame `index` in the sensor frame: ray-cast depth perturbed by the stereo error
+  /// model (σ_d, σ_px), plus outliers.
+  SimCloud RenderCloud(std::size_t index) const;
+
+  /// Writes sequence.yaml, frames/, odometry.tum and groundtruth.tum into `dir` (created if
+  /// needed; every file written atomically). `progress(done, total)` is called after each
+  /// frame (may be empty). terrain.tif: see sim/TerrainGeoTiff.hpp.
+  /// @throw io::IoError naming the file if something cannot be written.
+  SimulateResult WriteSequence(const std::filesystem::path& dir,
+                               const std::function<void(std::size_t, std::size_t)>& progress) const;
+
+ private:
+  Eigen::Isometry3d CameraPose(std::size_t index, bool right) const;
+
+  struct Path {
+    std::vector<Eigen::Vector2d> dense_xy;  // every few cm (for the rock keep-out)
+    std::vector<Eigen::Vector2d> frame_xy;  // per frame
+    std::vector<double> frame_heading;      // per frame [rad]
+  };
+  static Path MakePath(const SimOptions& options);
+
+  SimOptions options_;
+  Path path_;
+  Terrain terrain_;
+  std::vector<io::StampedPose> truth_;
+  std::vector<io::StampedPose> odometry_;
+  Eigen::Isometry3d T_body_sensor_ = Eigen::Isometry3d::Identity();
+};
+
+}  // namespace rovermap::sim

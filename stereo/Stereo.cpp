@@ -1,0 +1,330 @@
+#include "stereo/Stereo.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <unordered_map>
+#include <vector>
+
+namespace rovermap::stereo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+cv::Mat ToGrey(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  cv::cvtColor(image, grey, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+std::string CheckCamera(const StereoCamera& c) {
+  if (!(c.fx > 0 && c.fy > 0 && std::isfinite(c.fx) && std::isfinite(c.fy)))
+    return "focal lengths must be finite and > 0";
+  if (!(c.baseline_m > 0 && std::isfinite(c.baseline_m))) return "baseline must be > 0";
+  if (!std::isfinite(c.cx) || !std::isfinite(c.cy) || !std::isfinite(c.disparity_offset_px))
+    return "principal point and disparity offset must be finite";
+  return "";
+}
+
+}  // namespace
+
+const char* ToString(Algorithm algorithm) {
+  switch (algorithm) {
+    case Algorithm::kSgbm3Way:
+      return "sgbm_3way";
+    case Algorithm::kSgbm:
+      return "sgbm";
+    case Algorithm::kSgbmHh:
+      return "sgbm_hh";
+    case Algorithm::kBm:
+      return "bm";
+  }
+  return "?";
+}
+
+std::string CheckOptions(const StereoOptions& o) {
+  if (o.num_disparities <= 0 || o.num_disparities % 16 != 0)
+    return "stereo.num_disparities must be a positive multiple of 16";
+  if (o.block_size < 1 || o.block_size % 2 == 0) return "stereo.block_size must be odd and >= 1";
+  if (o.algorithm == Algorithm::kBm && (o.block_size < 5 || o.block_size > 255))
+    return "stereo.block_size must be in [5, 255] for bm";
+  if (o.algorithm == Algorithm::kBm && (o.pre_filter_cap < 1 || o.pre_filter_cap > 63))
+    return "stereo.pre_filter_cap must be in [1, 63] for bm";
+  if (o.p1 < 0 || o.p2 < 0 || (o.p1 > 0 && o.p2 > 0 && o.p2 <= o.p1))
+    return "stereo.p2 must be > stereo.p1";
+  if (!(o.min_range_m >= 0 && o.max_range_m > o.min_range_m))
+    return "stereo.max_range_m must be > stereo.min_range_m >= 0";
+  if (o.normal_step_px < 1) return "stereo.normal_step_px must be >= 1";
+  return "";
+}
+
+DisparityResult ComputeDisparity(const cv::Mat& left_in, const cv::Mat& right_in,
+                                 const StereoOptions& o) {
+  DisparityResult result;
+  const auto start = Clock::now();
+  if (left_in.empty() || right_in.empty() || left_in.size() != right_in.size() ||
+      left_in.depth() != CV_8U || right_in.depth() != CV_8U) {
+    result.status = StereoStatus::kInvalidInput;
+    result.message = "stereo: need two non-empty 8-bit images of the same size";
+    return result;
+  }
+  if (const std::string problem = CheckOptions(o); !problem.empty()) {
+    result.status = StereoStatus::kInvalidInput;
+    result.message = problem;
+    return result;
+  }
+  if (left_in.cols <= o.num_disparities + o.block_size) {
+    result.status = StereoStatus::kInvalidInput;
+    result.message = "stereo: image narrower than num_disparities + block_size";
+    return result;
+  }
+  const cv::Mat left = ToGrey(left_in);
+  const cv::Mat right = ToGrey(right_in);
+
+  cv::Mat raw;  // CV_16S, disparity × 16
+  if (o.algorithm == Algorithm::kBm) {
+    cv::Ptr<cv::StereoBM> bm = cv::StereoBM::create(o.num_disparities, o.block_size);
+    bm->setMinDisparity(o.min_disparity);
+    bm->setPreFilterCap(o.pre_filter_cap);
+    bm->setUniquenessRatio(o.uniqueness_ratio);
+    bm->setTextureThreshold(o.texture_threshold);
+    bm->setSpeckleWindowSize(o.speckle_window_size);
+    // StereoBM filters the ×16 disparity without rescaling the range (SGBM rescales).
+    bm->setSpeckleRange(16 * o.speckle_range);
+    bm->setDisp12MaxDiff(o.disp12_max_diff);
+    bm->compute(left, right, raw);
+  } else {
+    const int area = o.block_size * o.block_size;
+    const int mode = o.algorithm == Algorithm::kSgbm3Way ? cv::StereoSGBM::MODE_SGBM_3WAY
+                     : o.algorithm == Algorithm::kSgbmHh ? cv::StereoSGBM::MODE_HH
+                                                         : cv::StereoSGBM::MODE_SGBM;
+    cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+        o.min_disparity, o.num_disparities, o.block_size, o.p1 > 0 ? o.p1 : 8 * area,
+        o.p2 > 0 ? o.p2 : 32 * area, o.disp12_max_diff, o.pre_filter_cap, o.uniqueness_ratio,
+        o.speckle_window_size, o.speckle_range, mode);
+    sgbm->compute(left, right, raw);
+  }
+
+  result.disparity.create(raw.size(), CV_32F);
+  const int invalid_below = o.min_disparity * 16;
+  for (int v = 0; v < raw.rows; ++v) {
+    const std::int16_t* in = raw.ptr<std::int16_t>(v);
+    float* out = result.disparity.ptr<float>(v);
+    for (int u = 0; u < raw.cols; ++u) {
+      if (in[u] < invalid_below) {
+        out[u] = std::numeric_limits<float>::quiet_NaN();
+        ++result.invalid;
+      } else {
+        out[u] = static_cast<float>(in[u]) / 16.0f;
+        ++result.valid;
+      }
+    }
+  }
+  result.time_ms = MsSince(start);
+  return result;
+}
+
+Eigen::Matrix3d PointCovariance(const Eigen::Vector3d& p, const StereoCamera& c,
+                                double disparity_sigma_px, double pixel_sigma_px) {
+  // d' = fx·b / z; ∂(x,y,z)/∂u = (z/fx, 0, 0), ∂/∂v = (0, z/fy, 0), ∂/∂d = −p / d'.
+  const double z = p.z();
+  const double d = c.fx * c.baseline_m / z;
+  const Eigen::Vector3d j_d = -p / d;
+  const double su = pixel_sigma_px * z / c.fx;
+  const double sv = pixel_sigma_px * z / c.fy;
+  Eigen::Matrix3d cov = disparity_sigma_px * disparity_sigma_px * j_d * j_d.transpose();
+  cov(0, 0) += su * su;
+  cov(1, 1) += sv * sv;
+  return cov;
+}
+
+StereoPointsResult DisparityToPoints(const cv::Mat& disparity, const StereoCamera& camera,
+                                     const Eigen::Isometry3d& T_body_sensor,
+                                     const StereoOptions& o) {
+  StereoPointsResult result;
+  const auto start = Clock::now();
+  std::string problem = CheckCamera(camera);
+  if (problem.empty()) problem = CheckOptions(o);
+  if (problem.empty() && (disparity.empty() || disparity.type() != CV_32F))
+    problem = "stereo: disparity must be a non-empty CV_32F image";
+  if (!problem.empty()) {
+    result.status = StereoStatus::kInvalidInput;
+    result.message = problem;
+    return result;
+  }
+
+  // Organised camera-frame points; NaN z marks a pixel without a point.
+  const int rows = disparity.rows;
+  const int cols = disparity.cols;
+  std::vector<Eigen::Vector3d> organised(static_cast<std::size_t>(rows) * cols,
+                                         Eigen::Vector3d::Constant(std::nan("")));
+  const double fb = camera.fx * camera.baseline_m;
+  for (int v = 0; v < rows; ++v) {
+    const float* row = disparity.ptr<float>(v);
+    for (int u = 0; u < cols; ++u) {
+      ++result.pixels;
+      const double d = static_cast<double>(row[u]) + camera.disparity_offset_px;
+      if (!(d > 0.0) || !std::isfinite(d)) {
+        ++result.invalid_disparity;
+        continue;
+      }
+      const double z = fb / d;
+      const Eigen::Vector3d p((u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z);
+      if (!p.allFinite()) {
+        ++result.invalid_disparity;
+        continue;
+      }
+      const double range = p.norm();
+      if (range < o.min_range_m) {
+        ++result.too_near;
+        continue;
+      }
+      if (range > o.max_range_m) {
+        ++result.too_far;
+        continue;
+      }
+      organised[static_cast<std::size_t>(v) * cols + u] = p;
+    }
+  }
+
+  const Eigen::Matrix3d R = T_body_sensor.linear();
+  const int s = o.normal_step_px;
+  auto at = [&](int u, int v) -> const Eigen::Vector3d* {
+    if (u < 0 || v < 0 || u >= cols || v >= rows) return nullptr;
+    const Eigen::Vector3d& q = organised[static_cast<std::size_t>(v) * cols + u];
+    return std::isnan(q.z()) ? nullptr : &q;
+  };
+  registration::PointCloud& cloud = result.cloud;
+  for (int v = 0; v < rows; ++v) {
+    for (int u = 0; u < cols; ++u) {
+      const Eigen::Vector3d* p = at(u, v);
+      if (p == nullptr) continue;
+      Eigen::Vector3d normal_camera = Eigen::Vector3d::Zero();
+      if (o.compute_normals) {
+        // Central difference where both neighbours are on the same surface, else one-sided.
+        const double jump = o.normal_max_depth_jump * p->z() * s;
+        auto neighbour = [&](int du, int dv) -> const Eigen::Vector3d* {
+          const Eigen::Vector3d* q = at(u + du, v + dv);
+          return q != nullptr && std::abs(q->z() - p->z()) <= jump ? q : nullptr;
+        };
+        auto tangent = [&](int du, int dv, Eigen::Vector3d* t) {
+          const Eigen::Vector3d* a = neighbour(du, dv);
+          const Eigen::Vector3d* b = neighbour(-du, -dv);
+          if (a != nullptr && b != nullptr)
+            *t = *a - *b;
+          else if (a != nullptr)
+            *t = *a - *p;
+          else if (b != nullptr)
+            *t = *p - *b;
+          else
+            return false;
+          return true;
+        };
+        Eigen::Vector3d tu, tv;
+        if (tangent(s, 0, &tu) && tangent(0, s, &tv)) normal_camera = tu.cross(tv);
+        const double norm = normal_camera.norm();
+        if (!(norm > 0.0) || !std::isfinite(norm)) {
+          ++result.no_normal;
+          continue;
+        }
+        normal_camera /= norm;
+        if (normal_camera.dot(*p) > 0.0) normal_camera = -normal_camera;  // face the camera
+      }
+      cloud.points.push_back(T_body_sensor * *p);
+      cloud.covariances.push_back(
+          R * PointCovariance(*p, camera, o.disparity_sigma_px, o.pixel_sigma_px) * R.transpose());
+      if (o.compute_normals) cloud.normals.push_back(R * normal_camera);
+    }
+  }
+  result.merged = VoxelDownsample(&cloud, o.voxel_size_m);
+  result.points_ms = MsSince(start);
+  return result;
+}
+
+StereoPointsResult ComputePoints(const cv::Mat& left, const cv::Mat& right,
+                                 const StereoCamera& camera, const Eigen::Isometry3d& T_body_sensor,
+                                 const StereoOptions& options) {
+  DisparityResult disparity = ComputeDisparity(left, right, options);
+  if (disparity.status != StereoStatus::kOk) {
+    StereoPointsResult result;
+    result.status = disparity.status;
+    result.message = disparity.message;
+    return result;
+  }
+  StereoPointsResult result =
+      DisparityToPoints(disparity.disparity, camera, T_body_sensor, options);
+  result.disparity = disparity.disparity;
+  result.disparity_ms = disparity.time_ms;
+  return result;
+}
+
+std::size_t VoxelDownsample(registration::PointCloud* cloud, double voxel_size_m) {
+  if (!(voxel_size_m > 0.0) || cloud->empty()) return 0;
+  const bool has_cov = cloud->HasCovariances();
+  const bool has_normals = cloud->HasNormals();
+  struct Accumulator {
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // Σ Σᵢ⁻¹ (or count·I)
+    Eigen::Vector3d weighted = Eigen::Vector3d::Zero();     // Σ Σᵢ⁻¹ pᵢ (or Σ pᵢ)
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    std::size_t count = 0;
+  };
+  struct KeyHash {
+    std::size_t operator()(const Eigen::Vector3i& k) const {
+      return (static_cast<std::size_t>(k.x()) * 73856093u) ^
+             (static_cast<std::size_t>(k.y()) * 19349663u) ^
+             (static_cast<std::size_t>(k.z()) * 83492791u);
+    }
+  };
+  struct KeyEqual {
+    bool operator()(const Eigen::Vector3i& a, const Eigen::Vector3i& b) const { return a == b; }
+  };
+  std::unordered_map<Eigen::Vector3i, std::size_t, KeyHash, KeyEqual> index;
+  std::vector<Accumulator> voxels;
+  index.reserve(cloud->size());
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const Eigen::Vector3d& p = cloud->points[i];
+    const Eigen::Vector3i key = (p / voxel_size_m).array().floor().cast<int>();
+    const auto [it, inserted] = index.emplace(key, voxels.size());
+    if (inserted) voxels.emplace_back();
+    Accumulator& a = voxels[it->second];
+    Eigen::Matrix3d info = Eigen::Matrix3d::Identity();
+    if (has_cov) {
+      const Eigen::LDLT<Eigen::Matrix3d> ldlt(cloud->covariances[i]);
+      if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+        info = ldlt.solve(Eigen::Matrix3d::Identity());
+      }
+      if (!info.allFinite()) info = Eigen::Matrix3d::Identity() / cloud->covariances[i].trace();
+    }
+    a.information += info;
+    a.weighted += info * p;
+    if (has_normals) a.normal += cloud->normals[i];
+    ++a.count;
+  }
+  registration::PointCloud out;
+  out.points.reserve(voxels.size());
+  for (const Accumulator& a : voxels) {
+    const Eigen::Matrix3d cov = a.information.inverse();
+    out.points.push_back(cov * a.weighted);
+    if (has_cov) out.covariances.push_back(cov);
+    if (has_normals) {
+      const double n = a.normal.norm();
+      out.normals.push_back(n > 0 ? Eigen::Vector3d(a.normal / n) : Eigen::Vector3d::UnitZ());
+    }
+  }
+  const std::size_t merged = cloud->size() - out.size();
+  out.chain_ids.clear();
+  *cloud = std::move(out);
+  return merged;
+}
+
+}  // namespace rovermap::stereo
