@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "tests/support/ScratchDir.hpp"
 #include "config/Config.hpp"
 
 namespace rovermap::config {
@@ -26,14 +27,14 @@ using registration::Solver;
 const fs::path kDefaultYaml = fs::path(ROVERMAP_SOURCE_DIR) / "config" / "default.yaml";
 
 // EXPECT_TRUE(Contains(text, part)) prints both on failure (no gmock here).
-testing::AssertionResult Contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
+::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
 }
 
 // Writes `text` to a fresh file in the test's temporary directory.
 fs::path WriteFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_config";
+  const fs::path dir = rovermap::testing::ScratchDir();
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;
@@ -409,7 +410,7 @@ TEST(ConfigErrors, OutOfRangeNamesKeyBoundAndValue) {
 
 TEST(ConfigErrors, FileErrorsNameFileLineAndKey) {
   EXPECT_EQ(FileError("range.yaml", "# header\nregistration:\n  max_iterations: -3\n"),
-            (fs::path(testing::TempDir()) / "rovermap_test_config" / "range.yaml").string() +
+            (rovermap::testing::ScratchDir() / "range.yaml").string() +
                 ":3: registration.max_iterations: must be > 0 (got -3)");
   EXPECT_TRUE(Contains(FileError("type.yaml", "registration:\n  solver: lu\n"),
                        "type.yaml:2: registration.solver: must be one of"));
@@ -430,10 +431,10 @@ TEST(ConfigErrors, BadOverrideSyntax) {
 }
 
 TEST(ConfigErrors, MissingFileIsNamed) {
-  const fs::path missing = fs::path(testing::TempDir()) / "no_such_dir" / "config.yaml";
+  const fs::path missing = fs::path(::testing::TempDir()) / "no_such_dir" / "config.yaml";
   EXPECT_EQ(ErrorOf([&] { LoadConfig(missing, {}); }), missing.string() + ": no such config file");
   EXPECT_TRUE(
-      Contains(ErrorOf([] { LoadConfig(fs::path(testing::TempDir()), {}); }), "is a directory"));
+      Contains(ErrorOf([] { LoadConfig(fs::path(::testing::TempDir()), {}); }), "is a directory"));
 }
 
 TEST(ConfigErrors, MalformedYamlGivesFileAndLine) {

@@ -11,6 +11,7 @@
 #include <functional>
 #include <limits>
 
+#include "tests/support/ScratchDir.hpp"
 #include "eval/DemComparison.hpp"
 #include "io/IoError.hpp"
 
@@ -32,7 +33,7 @@ struct Grid {
 
 fs::path WriteGeoTiff(const std::string& name, const Grid& g) {
   GDALAllRegister();
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_eval_dem";
+  const fs::path dir = rovermap::testing::ScratchDir();
   fs::create_directories(dir);
   const fs::path path = dir / name;
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
@@ -189,7 +190,7 @@ TEST(CompareDems, NoOverlapAndBadFiles) {
   EXPECT_EQ(c.status, DemStatus::kNoOverlap);
   EXPECT_DOUBLE_EQ(c.coverage, 0.0);
 
-  const fs::path text = fs::path(testing::TempDir()) / "rovermap_test_eval_dem" / "not_a.tif";
+  const fs::path text = rovermap::testing::ScratchDir() / "not_a.tif";
   std::ofstream(text) << "hello\n";
   for (const fs::path& bad : {text, text.parent_path() / "missing.tif"}) {
     try {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/support/ScratchDir.hpp"
 #include "eval/TrajectoryIo.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "io/IoError.hpp"
@@ -33,7 +34,7 @@ Eigen::Matrix3d Rz(double angle) {
 }
 
 fs::path TempFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_eval_trajectory";
+  const fs::path dir = rovermap::testing::ScratchDir();
   fs::create_directories(dir);
   std::ofstream(dir / name, std::ios::binary) << text;
   return dir / name;

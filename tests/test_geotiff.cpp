@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/ScratchDir.hpp"
 #include "dem/ElevationMap.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
@@ -21,7 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_geotiff" / name;
+  const fs::path dir = rovermap::testing::ScratchDir() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "tests/support/ScratchDir.hpp"
 #include "dem/OctoMapFusion.hpp"
 #include "io/IoError.hpp"
 #include "io/OctoMapIo.hpp"
@@ -34,7 +35,7 @@ bool Free(const octomap::OcTree& tree, double x, double y, double z) {
 }
 
 fs::path TempDir() {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_octomap";
+  const fs::path dir = rovermap::testing::ScratchDir();
   fs::create_directories(dir);
   return dir;
 }

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "tests/support/ScratchDir.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/Sequence.hpp"
@@ -18,9 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-testing::AssertionResult Contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return testing::AssertionSuccess();
-  return testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
+::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
 }
 
 std::string ErrorOf(const std::function<void()>& f) {
@@ -72,7 +73,7 @@ std::string TumLines(int n, double t0 = 0.0) {
 
 // A fresh cloud sequence of `n` frames in the test's temporary directory.
 fs::path MakeCloudSequence(const std::string& name, int n) {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_sequence" / name;
+  const fs::path dir = rovermap::testing::ScratchDir() / name;
   fs::remove_all(dir);
   fs::create_directories(dir / "frames");
   Write(dir / "sequence.yaml", kCloudYaml);
@@ -87,7 +88,7 @@ fs::path MakeCloudSequence(const std::string& name, int n) {
 }
 
 fs::path MakeStereoSequence(const std::string& name, int n) {
-  const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_sequence" / name;
+  const fs::path dir = rovermap::testing::ScratchDir() / name;
   fs::remove_all(dir);
   fs::create_directories(dir / "frames");
   Write(dir / "sequence.yaml", kStereoYaml);
@@ -156,7 +157,7 @@ TEST(Sequence, StereoSequenceWithQuaternionAndBody) {
 }
 
 TEST(Sequence, TumRoundTrip) {
-  const fs::path file = fs::path(testing::TempDir()) / "rovermap_test_roundtrip.tum";
+  const fs::path file = rovermap::testing::ScratchDir() / "rovermap_test_roundtrip.tum";
   std::vector<StampedPose> poses(2);
   poses[0].timestamp = 1.25;
   poses[1].timestamp = 2.5;

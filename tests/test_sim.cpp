@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
+#include "tests/support/ScratchDir.hpp"
 #include "io/FileUtil.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Sequence.hpp"
@@ -48,9 +49,9 @@ double Quantile(std::vector<double> x, double q) {
 }
 
 TEST(Simulator, SameSeedSameSequenceOtherSeedDifferent) {
-  const fs::path a = fs::path(testing::TempDir()) / "rovermap_test_sim" / "a";
-  const fs::path b = fs::path(testing::TempDir()) / "rovermap_test_sim" / "b";
-  const fs::path c = fs::path(testing::TempDir()) / "rovermap_test_sim" / "c";
+  const fs::path a = rovermap::testing::ScratchDir() / "a";
+  const fs::path b = rovermap::testing::ScratchDir() / "b";
+  const fs::path c = rovermap::testing::ScratchDir() / "c";
   for (const auto& d : {a, b, c}) fs::remove_all(d);
   SimOptions o = Tiny();
   o.frames = 2;
@@ -69,7 +70,7 @@ TEST(Simulator, SameSeedSameSequenceOtherSeedDifferent) {
 
 TEST(Simulator, WritesAValidSequenceInBothModes) {
   for (SensorKind kind : {SensorKind::kStereo, SensorKind::kCloud}) {
-    const fs::path dir = fs::path(testing::TempDir()) / "rovermap_test_sim" / "valid";
+    const fs::path dir = rovermap::testing::ScratchDir() / "valid";
     fs::remove_all(dir);
     SimOptions o = Tiny();
     o.sensor = kind;
@@ -236,7 +237,7 @@ TEST(Simulator, TerrainGeoTiffHoldsTheTrueHeights) {
   SimOptions o = Tiny();
   o.frames = 1;
   const Simulator sim(o);
-  const fs::path file = fs::path(testing::TempDir()) / "rovermap_test_sim_terrain.tif";
+  const fs::path file = rovermap::testing::ScratchDir() / "rovermap_test_sim_terrain.tif";
   dem::ElevationMapOptions grid;
   grid.cell_size_m = 0.2;
   const io::GeoTiffInfo info = WriteTerrainGeoTiff(file, sim, grid);
