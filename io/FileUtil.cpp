@@ -111,6 +111,10 @@ void WriteFileAtomically(const std::filesystem::path& path, std::string_view con
   if (::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
   if (fd.Close() != 0) fail("cannot close file", errno);
 
+  CommitTemporaryFile(temp, path);
+}
+
+void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path) {
   std::error_code ec;
   std::filesystem::rename(temp, path, ec);
   if (ec) {

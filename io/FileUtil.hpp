@@ -16,4 +16,8 @@ std::string ReadWholeFile(const std::filesystem::path& path);
 /// temporary is removed and IoError (naming `path`) is thrown.
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
 
+/// Renames a finished temporary file over `path` (the last step of every atomic write).
+/// On failure the temporary is removed and IoError (naming `path`) is thrown.
+void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path);
+
 }  // namespace rovermap::io

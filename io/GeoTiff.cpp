@@ -1,5 +1,7 @@
 #include "io/GeoTiff.hpp"
 
+#include "io/FileUtil.hpp"
+
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
@@ -183,13 +185,7 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
     ::unlink(temp.c_str());
     Fail(path, "GDAL cannot finish the GeoTIFF");
   }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) {
-    ::unlink(temp.c_str());
-    throw IoError(path.string() + ": cannot rename temporary file into place (" + ec.message() +
-                  ")");
-  }
+  CommitTemporaryFile(temp, path);
   return info;
 }
 

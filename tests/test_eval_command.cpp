@@ -12,53 +12,19 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "tests/support/CommandFixture.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CommandResult {
-  int status = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using rovermap::testing::CommandResult;
+using rovermap::testing::Slurp;
 
 const fs::path kKitti00 = fs::path(ROVERMAP_DATASETS_DIR) / "kitti_odometry_00" / "KITTI_00_gt.txt";
 
-class EvalCommand : public ::testing::Test {
+class EvalCommand : public rovermap::testing::CommandFixture {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("rovermap_eval_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CommandResult Rovermap(const std::string& args) {
-    const std::string cmd = std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" +
-                            (dir_ / "stdout").string() + " 2>" + (dir_ / "stderr").string();
-    const int rc = std::system(cmd.c_str());
-    CommandResult r;
-    r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
-    r.out = Slurp(dir_ / "stdout");
-    r.err = Slurp(dir_ / "stderr");
-    return r;
-  }
-
-  std::string Write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p.string();
-  }
-
   // A 1 m grid of `width` × `height` cells at UTM (500000, 4000000), value = f(col, row).
   std::string GeoTiff(const std::string& name, int width, int height, int epsg,
                       float (*f)(int, int)) {
@@ -94,8 +60,6 @@ class EvalCommand : public ::testing::Test {
     for (const auto& entry : fs::recursive_directory_iterator(d))
       EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
   }
-
-  fs::path dir_;
 };
 
 // KITTI 00's ground truth against itself and against a copy with every translation × 1.01.

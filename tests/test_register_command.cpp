@@ -8,50 +8,17 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "tests/support/CommandFixture.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CommandResult {
-  int status = -1;
-  std::string out;
-  std::string err;
-};
+using rovermap::testing::CommandResult;
+using rovermap::testing::Slurp;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class RegisterCommand : public ::testing::Test {
+class RegisterCommand : public rovermap::testing::CommandFixture {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("rovermap_register_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CommandResult Rovermap(const std::string& args) {
-    const std::string cmd = std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" +
-                            (dir_ / "stdout").string() + " 2>" + (dir_ / "stderr").string();
-    const int rc = std::system(cmd.c_str());
-    CommandResult r;
-    r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
-    r.out = Slurp(dir_ / "stdout");
-    r.err = Slurp(dir_ / "stderr");
-    return r;
-  }
-
-  std::string Write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p.string();
-  }
-
   // A small valid cloud (a bumpy grid) to pair with a bad one.
   std::string GoodXyz() {
     std::ostringstream s;
@@ -59,8 +26,6 @@ class RegisterCommand : public ::testing::Test {
       for (int j = 0; j < 20; ++j) s << 0.1 * i << " " << 0.1 * j << " " << 0.05 * ((i * j) % 3) << "\n";
     return Write("good.xyz", s.str());
   }
-
-  fs::path dir_;
 };
 
 const std::string kBunny = std::string(ROVERMAP_DATASETS_DIR) + "/stanford_bunny/";

@@ -1,0 +1,58 @@
+#pragma once
+// Runs the `rovermap` executable in end-to-end tests: exit status, stdout and stderr, with a
+// scratch directory per test for inputs and outputs.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/support/ScratchDir.hpp"
+
+namespace rovermap::testing {
+
+struct CommandResult {
+  int status = -1;  ///< exit status, or 128 + signal
+  std::string out;
+  std::string err;
+};
+
+inline std::string Slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class CommandFixture : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = ScratchDir(); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  /// `rovermap ARGS` (ARGS as a shell would split them).
+  CommandResult Rovermap(const std::string& args) {
+    const std::string cmd = std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" +
+                            (dir_ / "stdout").string() + " 2>" + (dir_ / "stderr").string();
+    const int rc = std::system(cmd.c_str());
+    CommandResult r;
+    r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
+    r.out = Slurp(dir_ / "stdout");
+    r.err = Slurp(dir_ / "stderr");
+    return r;
+  }
+
+  /// Writes `text` to `name` in the scratch directory; returns its path.
+  std::string Write(const std::string& name, const std::string& text) {
+    const std::filesystem::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p.string();
+  }
+
+  std::filesystem::path dir_;
+};
+
+}  // namespace rovermap::testing
