@@ -11,6 +11,7 @@
 #include "eval/EvalPlots.hpp"
 #include "eval/TrajectoryIo.hpp"
 #include "eval/TrajectoryMetrics.hpp"
+#include "io/GeoTiff.hpp"
 #include "io/IoError.hpp"
 
 namespace rovermap::apps {
@@ -75,8 +76,8 @@ int RunTrajectories(const EvalArgs& args, const eval::EvalOptions& options) {
 }
 
 int RunDem(const EvalArgs& args) {
-  const eval::DemRaster dem = eval::ReadDemRaster(args.dem);
-  const eval::DemRaster reference = eval::ReadDemRaster(args.reference);
+  const io::DemRaster dem = io::ReadDemGeoTiff(args.dem);
+  const io::DemRaster reference = io::ReadDemGeoTiff(args.reference);
   const eval::DemComparison comparison = eval::CompareDems(dem, reference);
   nlohmann::json out = {{"dem", dem.file}, {"reference", reference.file}};
   out.update(eval::ToJson(comparison));

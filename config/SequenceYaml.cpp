@@ -148,8 +148,7 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
 
   if (const YAML::Node camera = root["camera"]) {
     r.Map(camera, "camera", {"width", "height", "fx", "fy", "cx", "cy", "baseline"});
-    SequenceCamera c;
-    c.line = static_cast<int>(camera.Mark().line + 1);
+    io::CameraModel c;
     auto positive = [&](const char* name) {
       const YAML::Node node = r.Required(camera, "camera", name);
       const double value = r.Number(node, std::string("camera.") + name);
@@ -162,7 +161,7 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
     if (c.height <= 0) r.Fail(camera["height"].Mark(), "camera.height", "must be > 0");
     c.fx = positive("fx");
     c.fy = positive("fy");
-    c.baseline = positive("baseline");
+    c.baseline_m = positive("baseline");
     c.cx = r.Number(r.Required(camera, "camera", "cx"), "camera.cx");
     c.cy = r.Number(r.Required(camera, "camera", "cy"), "camera.cy");
     if (c.cx < 0 || c.cx > c.width) {

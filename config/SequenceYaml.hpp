@@ -7,25 +7,15 @@
 #include <optional>
 #include <string>
 
-namespace rovermap::config {
+#include "io/CameraModel.hpp"  // header-only: config does not link io
 
-/// `camera:` of sequence.yaml: a rectified pair.
-struct SequenceCamera {
-  int width = 0;          ///< [px]
-  int height = 0;         ///< [px]
-  double fx = 0.0;        ///< [px]
-  double fy = 0.0;        ///< [px]
-  double cx = 0.0;        ///< [px]
-  double cy = 0.0;        ///< [px]
-  double baseline = 0.0;  ///< [m]
-  int line = 0;           ///< line of `camera:` in the file (for messages)
-};
+namespace rovermap::config {
 
 /// The keys of sequence.yaml as written (angles in degrees, lengths in metres), after range
 /// checks on each value. Exactly one of `rotation_rpy_deg` and `quaternion_xyzw` is set.
 struct SequenceYaml {
   std::string sensor_type;                                ///< "stereo" or "cloud"
-  std::optional<SequenceCamera> camera;                   ///< required for stereo
+  std::optional<io::CameraModel> camera;                  ///< required for stereo
   std::array<double, 3> translation{};                    ///< T_body_sensor translation [m]
   std::optional<std::array<double, 3>> rotation_rpy_deg;  ///< R = Rz(y)·Ry(p)·Rx(r) [deg]
   std::optional<std::array<double, 4>> quaternion_xyzw;   ///< unit quaternion x y z w

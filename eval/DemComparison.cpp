@@ -1,17 +1,10 @@
 #include "eval/DemComparison.hpp"
 
-#include <cpl_error.h>
-#include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
-#include <mutex>
-#include <system_error>
-
-#include "io/IoError.hpp"
 
 namespace rovermap::eval {
 namespace {
@@ -22,30 +15,12 @@ nlohmann::json Number(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
-struct GdalCloser {
-  void operator()(GDALDataset* dataset) const { GDALClose(dataset); }
-};
-
-std::vector<float> ReadBand(GDALDataset& dataset, int band_index, const std::string& file) {
-  GDALRasterBand* band = dataset.GetRasterBand(band_index);
-  const int width = dataset.GetRasterXSize(), height = dataset.GetRasterYSize();
-  std::vector<float> values(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-  if (band->RasterIO(GF_Read, 0, 0, width, height, values.data(), width, height, GDT_Float32, 0,
-                     0) != CE_None)
-    throw io::IoError(file + ": cannot read band " + std::to_string(band_index) + ": " +
-                      CPLGetLastErrorMsg());
-  int has_nodata = 0;
-  const double nodata = band->GetNoDataValue(&has_nodata);
-  if (has_nodata && !std::isnan(nodata)) {
-    const float nodata_float = static_cast<float>(nodata);
-    for (float& v : values)
-      if (v == nodata_float) v = std::numeric_limits<float>::quiet_NaN();
-  }
-  return values;
+double CellArea(const io::DemRaster& grid) {
+  return std::abs(grid.geotransform[1] * grid.geotransform[5]);
 }
 
 // Index of the cell of `grid` containing (x, y), or -1 outside.
-long CellAt(const DemRaster& grid, double x, double y) {
+long CellAt(const io::DemRaster& grid, double x, double y) {
   const auto& g = grid.geotransform;
   const double col = std::floor((x - g[0]) / g[1]);
   const double row = std::floor((y - g[3]) / g[5]);
@@ -54,17 +29,17 @@ long CellAt(const DemRaster& grid, double x, double y) {
 }
 
 // Centre of cell `k` of `grid`.
-std::pair<double, double> CellCentre(const DemRaster& grid, std::size_t k) {
+std::pair<double, double> CellCentre(const io::DemRaster& grid, std::size_t k) {
   const auto& g = grid.geotransform;
   const double col = static_cast<double>(k % static_cast<std::size_t>(grid.width)) + 0.5;
   const double row = static_cast<double>(k / static_cast<std::size_t>(grid.width)) + 0.5;
   return {g[0] + col * g[1], g[3] + row * g[5]};
 }
 
-std::string CrsName(const DemRaster& raster) {
-  if (raster.crs_wkt.empty()) return "no CRS";
+std::string CrsName(const io::DemRaster& raster) {
+  if (raster.wkt.empty()) return "no CRS";
   OGRSpatialReference srs;
-  if (srs.importFromWkt(raster.crs_wkt.c_str()) != OGRERR_NONE) return "an unreadable CRS";
+  if (srs.importFromWkt(raster.wkt.c_str()) != OGRERR_NONE) return "an unreadable CRS";
   const char* name = srs.GetName();
   return name ? "'" + std::string(name) + "'" : "an unnamed CRS";
 }
@@ -80,50 +55,11 @@ double Percentile(std::vector<double> values, double fraction) {
 
 }  // namespace
 
-DemRaster ReadDemRaster(const std::filesystem::path& path) {
-  static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
-  DemRaster raster;
-  raster.file = path.string();
-  CPLPushErrorHandler(CPLQuietErrorHandler);  // library code never prints; the message is ours
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, GdalCloser> dataset(
-      GDALDataset::Open(raster.file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
-  CPLPopErrorHandler();
-  if (!dataset) {
-    std::error_code error;
-    const std::string reason =
-        !std::filesystem::exists(path, error)
-            ? "no such file"
-            : "not a raster GDAL can read (" + std::string(CPLGetLastErrorMsg()) + ")";
-    throw io::IoError(raster.file + ": " + reason);
-  }
-  if (dataset->GetRasterCount() < 1) throw io::IoError(raster.file + ": has no raster band");
-  if (dataset->GetGeoTransform(raster.geotransform.data()) != CE_None)
-    throw io::IoError(raster.file + ": has no georeferencing (geotransform)");
-  const auto& g = raster.geotransform;
-  if (g[2] != 0.0 || g[4] != 0.0 || g[1] == 0.0 || g[5] == 0.0)
-    throw io::IoError(raster.file + ": rotated or degenerate grids are not supported");
-  raster.width = dataset->GetRasterXSize();
-  raster.height = dataset->GetRasterYSize();
-  if (const char* wkt = dataset->GetProjectionRef(); wkt) raster.crs_wkt = wkt;
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  try {
-    raster.elevation = ReadBand(*dataset, 1, raster.file);
-    if (dataset->GetRasterCount() >= 2) raster.sigma = ReadBand(*dataset, 2, raster.file);
-  } catch (...) {
-    CPLPopErrorHandler();
-    throw;
-  }
-  CPLPopErrorHandler();
-  return raster;
-}
-
-bool SameCrs(const DemRaster& a, const DemRaster& b) {
-  if (a.crs_wkt.empty() || b.crs_wkt.empty()) return a.crs_wkt.empty() && b.crs_wkt.empty();
+bool SameCrs(const io::DemRaster& a, const io::DemRaster& b) {
+  if (a.wkt.empty() || b.wkt.empty()) return a.wkt.empty() && b.wkt.empty();
   OGRSpatialReference srs_a, srs_b;
-  if (srs_a.importFromWkt(a.crs_wkt.c_str()) != OGRERR_NONE ||
-      srs_b.importFromWkt(b.crs_wkt.c_str()) != OGRERR_NONE)
+  if (srs_a.importFromWkt(a.wkt.c_str()) != OGRERR_NONE ||
+      srs_b.importFromWkt(b.wkt.c_str()) != OGRERR_NONE)
     return false;
   return srs_a.IsSame(&srs_b);
 }
@@ -142,7 +78,7 @@ std::string ToString(DemStatus status) {
   return "ok";
 }
 
-DemComparison CompareDems(const DemRaster& dem, const DemRaster& reference) {
+DemComparison CompareDems(const io::DemRaster& dem, const io::DemRaster& reference) {
   DemComparison c;
   c.rmse_m = c.bias_m = c.p95_abs_m = c.max_abs_m = c.coverage = c.within_2sigma = kNaN;
   if (!SameCrs(dem, reference)) {
@@ -153,26 +89,26 @@ DemComparison CompareDems(const DemRaster& dem, const DemRaster& reference) {
     return c;
   }
   // The comparison grid: the coarser one; the finer raster is averaged into its cells.
-  c.on_reference_grid = reference.cell_area_m2() >= dem.cell_area_m2();
-  const DemRaster& grid = c.on_reference_grid ? reference : dem;
-  const DemRaster& fine = c.on_reference_grid ? dem : reference;
+  c.on_reference_grid = CellArea(reference) >= CellArea(dem);
+  const io::DemRaster& grid = c.on_reference_grid ? reference : dem;
+  const io::DemRaster& fine = c.on_reference_grid ? dem : reference;
   c.width = grid.width;
   c.height = grid.height;
-  c.cell_size_m = std::sqrt(grid.cell_area_m2());
+  c.cell_size_m = std::sqrt(CellArea(grid));
   c.north_row_first = grid.geotransform[5] < 0.0;
-  const std::size_t cells = grid.elevation.size();
+  const std::size_t cells = grid.elevation_m.size();
   std::vector<double> sum(cells, 0.0), sigma_sum(cells, 0.0);
   std::vector<std::size_t> count(cells, 0), sigma_count(cells, 0);
-  const bool fine_has_sigma = c.on_reference_grid && !dem.sigma.empty();
-  for (std::size_t k = 0; k < fine.elevation.size(); ++k) {
-    if (!std::isfinite(fine.elevation[k])) continue;
+  const bool fine_has_sigma = c.on_reference_grid && !dem.stddev_m.empty();
+  for (std::size_t k = 0; k < fine.elevation_m.size(); ++k) {
+    if (!std::isfinite(fine.elevation_m[k])) continue;
     const auto [x, y] = CellCentre(fine, k);
     const long cell = CellAt(grid, x, y);
     if (cell < 0) continue;
-    sum[cell] += fine.elevation[k];
+    sum[cell] += fine.elevation_m[k];
     ++count[cell];
-    if (fine_has_sigma && std::isfinite(fine.sigma[k])) {
-      sigma_sum[cell] += fine.sigma[k];
+    if (fine_has_sigma && std::isfinite(fine.stddev_m[k])) {
+      sigma_sum[cell] += fine.stddev_m[k];
       ++sigma_count[cell];
     }
   }
@@ -182,19 +118,19 @@ DemComparison CompareDems(const DemRaster& dem, const DemRaster& reference) {
     const double averaged = count[k] > 0 ? sum[k] / static_cast<double>(count[k]) : kNaN;
     if (c.on_reference_grid) {
       dem_value[k] = averaged;
-      reference_value[k] = reference.elevation[k];
+      reference_value[k] = reference.elevation_m[k];
       if (sigma_count[k] > 0) dem_sigma[k] = sigma_sum[k] / static_cast<double>(sigma_count[k]);
     } else {
-      dem_value[k] = dem.elevation[k];
+      dem_value[k] = dem.elevation_m[k];
       reference_value[k] = averaged;
-      if (!dem.sigma.empty()) dem_sigma[k] = dem.sigma[k];
+      if (!dem.stddev_m.empty()) dem_sigma[k] = dem.stddev_m[k];
     }
   }
 
   // Coverage on the reference's own cells.
   std::size_t reference_cells = 0, mapped = 0;
-  for (std::size_t k = 0; k < reference.elevation.size(); ++k) {
-    if (!std::isfinite(reference.elevation[k])) continue;
+  for (std::size_t k = 0; k < reference.elevation_m.size(); ++k) {
+    if (!std::isfinite(reference.elevation_m[k])) continue;
     ++reference_cells;
     const auto [x, y] = CellCentre(reference, k);
     const long cell = c.on_reference_grid ? static_cast<long>(k) : CellAt(grid, x, y);

@@ -2,37 +2,16 @@
 // DEM accuracy against a reference terrain (`rovermap eval --dem A.tif --reference B.tif`,
 // DESIGN.md §8): both grids compared where both have data, on the coarser of the two grids.
 
-#include <array>
-#include <cmath>
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "io/GeoTiff.hpp"  // DemRaster, ReadDemGeoTiff: band 1 elevation, band 2 its σ
+
 namespace rovermap::eval {
 
-/// A north-up (axis-aligned) raster as GDAL reads it; band 1 elevation, optional band 2 its
-/// standard deviation (dem.tif's layout, DESIGN.md §6).
-struct DemRaster {
-  std::string file;
-  int width = 0;
-  int height = 0;
-  /// GDAL geotransform: x = g[0] + (col)·g[1], y = g[3] + (row)·g[5] at a cell's corner;
-  /// g[2] = g[4] = 0.
-  std::array<double, 6> geotransform = {0.0, 1.0, 0.0, 0.0, 0.0, -1.0};
-  std::string crs_wkt;           ///< empty when the file has no CRS
-  std::vector<float> elevation;  ///< [m], row-major, NaN = no data (the band's nodata mapped)
-  std::vector<float> sigma;      ///< [m], band 2 likewise, or empty when there is one band
-  double cell_area_m2() const { return std::abs(geotransform[1] * geotransform[5]); }
-};
-
-/// Reads bands 1 and 2 (if present) as Float32; values equal to a band's nodata become NaN.
-/// @throw io::IoError naming the file if GDAL cannot open it, it has no georeferencing
-///        (geotransform), or its grid is rotated.
-DemRaster ReadDemRaster(const std::filesystem::path& path);
-
 /// True if both have no CRS, or both have one and GDAL finds them the same.
-bool SameCrs(const DemRaster& a, const DemRaster& b);
+bool SameCrs(const io::DemRaster& a, const io::DemRaster& b);
 
 enum class DemStatus { kOk, kCrsMismatch, kNoReferenceData, kNoOverlap };
 std::string ToString(DemStatus status);
@@ -63,7 +42,7 @@ struct DemComparison {
 
 /// Compares `dem` with `reference`. Never throws; a CRS mismatch, a reference without data or no
 /// cell with both gives that status and a message naming both files.
-DemComparison CompareDems(const DemRaster& dem, const DemRaster& reference);
+DemComparison CompareDems(const io::DemRaster& dem, const io::DemRaster& reference);
 
 /// rmse_m, bias_m, p95_abs_m, coverage, within_2sigma, cells (DESIGN.md §8) and the rest; NaN →
 /// null.

@@ -8,18 +8,20 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/Tum.hpp"
 
 namespace rovermap::eval {
 namespace {
 
-constexpr int kTumColumns = 8;
-constexpr int kKittiColumns = 12;
+constexpr std::size_t kTumColumns = 8;
+constexpr std::size_t kKittiColumns = 12;
 
 std::string Where(const std::filesystem::path& path, std::size_t line) {
   return path.string() + ":" + std::to_string(line) + ": ";
 }
 
-// The numbers of one line (comment and CR stripped); throws on a non-numeric or non-finite one.
+// The numbers of one line (comment and CR stripped); throws on a non-numeric or non-finite one
+// with io::ReadTum's wording.
 std::vector<double> ParseNumbers(const std::string& text, const std::string& where) {
   std::vector<double> values;
   std::istringstream tokens(text);
@@ -29,22 +31,39 @@ std::vector<double> ParseNumbers(const std::string& text, const std::string& whe
     const char* last = token.data() + token.size();
     if (token.size() > 1 && token[0] == '+') ++first;
     const auto [ptr, ec] = std::from_chars(first, last, value);
-    if (ec != std::errc() || ptr != last)
-      throw io::IoError(where + "non-numeric value '" + token + "'");
-    if (!std::isfinite(value)) throw io::IoError(where + "non-finite value '" + token + "'");
+    if (ec != std::errc() || ptr != last || !std::isfinite(value))
+      throw io::IoError(where + "not a finite number '" + token + "'");
     values.push_back(value);
   }
   return values;
 }
 
-Eigen::Isometry3d TumPose(const std::vector<double>& v, const std::string& where) {
-  Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order x y z w (DESIGN.md §3)
-  if (std::abs(q.norm() - 1.0) > 1e-3)
-    throw io::IoError(where + "quaternion norm " + std::to_string(q.norm()) + " is not 1");
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = q.normalized().toRotationMatrix();
-  T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-  return T;
+// Calls visit(values, where) for every line holding numbers until it returns false.
+template <typename Visit>
+void ForEachDataLine(const std::string& contents, const std::filesystem::path& path, Visit visit) {
+  std::istringstream lines(contents);
+  std::size_t line_number = 0;
+  for (std::string line; std::getline(lines, line);) {
+    ++line_number;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    const std::string where = Where(path, line_number);
+    const std::vector<double> values = ParseNumbers(line, where);
+    if (!values.empty() && !visit(values, where)) return;
+  }
+}
+
+// The format of the first data line (8 numbers: TUM, 12: KITTI); TUM for a file without one.
+TrajectoryFormat DetectFormat(const std::string& contents, const std::filesystem::path& path) {
+  TrajectoryFormat format = TrajectoryFormat::kTum;
+  ForEachDataLine(contents, path, [&](const std::vector<double>& values, const std::string& where) {
+    if (values.size() == kKittiColumns)
+      format = TrajectoryFormat::kKitti;
+    else if (values.size() != kTumColumns)
+      throw io::IoError(where + std::to_string(values.size()) +
+                        " numbers: expected 8 (TUM) or 12 (KITTI)");
+    return false;
+  });
+  return format;
 }
 
 Eigen::Isometry3d KittiPose(const std::vector<double>& v, const std::string& where) {
@@ -87,42 +106,23 @@ Trajectory ReadTrajectory(const std::filesystem::path& path, TrajectoryFormat fo
   const std::string contents = io::ReadWholeFile(path);
   Trajectory trajectory;
   trajectory.file = path.string();
-  std::istringstream lines(contents);
-  std::size_t line_number = 0;
-  for (std::string line; std::getline(lines, line);) {
-    ++line_number;
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
-    const std::string where = Where(path, line_number);
-    const std::vector<double> values = ParseNumbers(line, where);
-    if (values.empty()) continue;
-    const int columns = static_cast<int>(values.size());
-    if (format == TrajectoryFormat::kAuto) {
-      if (columns == kTumColumns)
-        format = TrajectoryFormat::kTum;
-      else if (columns == kKittiColumns)
-        format = TrajectoryFormat::kKitti;
-      else
-        throw io::IoError(where + std::to_string(columns) +
-                          " numbers: expected 8 (TUM) or 12 (KITTI)");
+  trajectory.format = format == TrajectoryFormat::kAuto ? DetectFormat(contents, path) : format;
+  if (trajectory.format == TrajectoryFormat::kTum) {
+    for (const io::StampedPose& pose : io::ParseTum(contents, path)) {
+      trajectory.timestamps_s.push_back(pose.timestamp);
+      trajectory.poses.push_back(pose.T_world_body);
     }
-    if (format == TrajectoryFormat::kTum) {
-      if (columns != kTumColumns)
-        throw io::IoError(where + std::to_string(columns) +
-                          " numbers: expected 8 (TUM: timestamp tx ty tz qx qy qz qw)");
-      if (!trajectory.timestamps_s.empty() && values[0] <= trajectory.timestamps_s.back())
-        throw io::IoError(where + "timestamp " + std::to_string(values[0]) +
-                          " is not after the previous one");
-      trajectory.timestamps_s.push_back(values[0]);
-      trajectory.poses.push_back(TumPose(values, where));
-    } else {
-      if (columns != kKittiColumns)
-        throw io::IoError(where + std::to_string(columns) +
-                          " numbers: expected 12 (KITTI: row-major 3x4 [R | t])");
-      trajectory.poses.push_back(KittiPose(values, where));
-    }
+  } else {
+    ForEachDataLine(contents, path,
+                    [&](const std::vector<double>& values, const std::string& where) {
+                      if (values.size() != kKittiColumns)
+                        throw io::IoError(where + std::to_string(values.size()) +
+                                          " numbers: expected 12 (KITTI: row-major 3x4 [R | t])");
+                      trajectory.poses.push_back(KittiPose(values, where));
+                      return true;
+                    });
   }
   if (trajectory.poses.empty()) throw io::IoError(path.string() + ": no poses in the file");
-  trajectory.format = format;
   return trajectory;
 }
 

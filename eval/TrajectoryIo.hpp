@@ -30,7 +30,7 @@ struct Trajectory {
 /// Reads a trajectory. Lines: whitespace-separated numbers, `#` comments (whole line or
 /// trailing), blank lines ignored, LF or CRLF. kAuto picks the format from the first data line
 /// (8 numbers: TUM, 12: KITTI). TUM quaternions are normalised; KITTI rotations (printed with
-/// 7 digits) are projected onto the nearest rotation.
+/// 7 digits) are projected onto the nearest rotation. TUM files are parsed by io::ParseTum.
 /// @throw io::IoError "FILE:LINE: reason" if the file is missing or unreadable, has no pose, a
 ///        line has the wrong count of numbers or a non-numeric or non-finite value, a quaternion's
 ///        norm differs from 1 by more than 1e-3, a KITTI matrix is not a rotation within 1e-3

@@ -203,10 +203,15 @@ DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
   DatasetPtr ds(GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
   if (!ds) Fail(path, "cannot open as a raster");
   DemRaster raster;
+  raster.file = path.string();
   raster.width = ds->GetRasterXSize();
   raster.height = ds->GetRasterYSize();
   if (ds->GetGeoTransform(raster.geotransform.data()) != CE_None) {
     Fail(path, "has no geotransform");
+  }
+  const auto& g = raster.geotransform;
+  if (g[2] != 0.0 || g[4] != 0.0 || g[1] == 0.0 || g[5] == 0.0) {
+    Fail(path, "rotated or degenerate grids are not supported");
   }
   if (const char* wkt = ds->GetProjectionRef(); wkt != nullptr) raster.wkt = wkt;
   if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs != nullptr) {
@@ -241,6 +246,12 @@ DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
                                            targets[b]->data(), raster.width, raster.height,
                                            GDT_Float32, 0, 0, nullptr) != CE_None) {
       Fail(path, "cannot read band " + std::to_string(b + 1));
+    }
+    if (raster.has_nodata[b] && !std::isnan(raster.nodata[b])) {
+      const auto nodata = static_cast<float>(raster.nodata[b]);
+      for (float& v : *targets[b]) {
+        if (v == nodata) v = std::numeric_limits<float>::quiet_NaN();
+      }
     }
   }
   return raster;

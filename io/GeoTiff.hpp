@@ -43,12 +43,14 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
 
 /// A DEM GeoTIFF read back (row-major, row 0 = north, as stored).
 struct DemRaster {
+  std::string file;  ///< where it was read from (for messages)
   int width = 0;
   int height = 0;
+  /// GDAL order: x = g[0] + col·g[1], y = g[3] + row·g[5] at a cell's corner; g[2] = g[4] = 0.
   std::array<double, 6> geotransform{};
-  std::string wkt;                             ///< the CRS as WKT
+  std::string wkt;                             ///< the CRS as WKT, empty when the file has none
   int epsg = 0;                                ///< when the CRS has an EPSG code, else 0
-  std::vector<float> elevation_m;              ///< band 1
+  std::vector<float> elevation_m;              ///< band 1, NaN = no data
   std::vector<float> stddev_m;                 ///< band 2 (empty if the file has one band)
   std::vector<float> count;                    ///< band 3 (empty if absent)
   std::vector<std::string> band_types;         ///< GDAL data type name per band ("Float32")
@@ -63,8 +65,10 @@ struct DemRaster {
   float ElevationAt(int col, int row) const;
 };
 
-/// Reads a GeoTIFF written by WriteDemGeoTiff (or any 1..3-band raster: band 1 elevation).
-/// @throw IoError naming `path` if it cannot be opened or read.
+/// Reads a GeoTIFF written by WriteDemGeoTiff (or any north-up 1..3-band raster GDAL reads:
+/// band 1 elevation) as Float32; values equal to a band's nodata become NaN.
+/// @throw IoError naming `path` if it cannot be opened or read, has no geotransform, or its grid
+///        is rotated or degenerate.
 DemRaster ReadDemGeoTiff(const std::filesystem::path& path);
 
 }  // namespace rovermap::io

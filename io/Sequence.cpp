@@ -69,10 +69,7 @@ SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
   SequenceInfo info;
   info.directory = sequence_dir;
   info.sensor_type = yaml.sensor_type == "cloud" ? SensorType::kCloud : SensorType::kStereo;
-  if (yaml.camera) {
-    const config::SequenceCamera& c = *yaml.camera;
-    info.camera = CameraModel{c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.baseline};
-  }
+  info.camera = yaml.camera;
   info.T_body_sensor.translation() =
       Eigen::Vector3d(yaml.translation[0], yaml.translation[1], yaml.translation[2]);
   if (yaml.rotation_rpy_deg) {

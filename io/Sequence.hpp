@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "io/CameraModel.hpp"
 #include "io/Georeference.hpp"  // GeodeticOrigin
 #include "io/Tum.hpp"
 #include "registration/PointCloud.hpp"
@@ -18,17 +19,6 @@
 namespace rovermap::io {
 
 enum class SensorType { kStereo, kCloud };
-
-/// `camera:` of sequence.yaml: a rectified stereo pair (pinhole, shared intrinsics).
-struct CameraModel {
-  int width = 0;    ///< [px]
-  int height = 0;   ///< [px]
-  double fx = 0.0;  ///< [px]
-  double fy = 0.0;  ///< [px]
-  double cx = 0.0;  ///< [px]
-  double cy = 0.0;  ///< [px]
-  double baseline_m = 0.0;
-};
 
 /// Everything sequence.yaml says.
 struct SequenceInfo {

@@ -17,15 +17,18 @@ bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 }  // namespace
 
 std::vector<StampedPose> ReadTum(const std::filesystem::path& path) {
-  const std::string text = ReadWholeFile(path);
+  return ParseTum(ReadWholeFile(path), path);
+}
+
+std::vector<StampedPose> ParseTum(std::string_view text, const std::filesystem::path& path) {
   std::vector<StampedPose> poses;
   std::size_t start = 0;
   int line_number = 0;
   while (start < text.size()) {
     std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
+    if (end == std::string_view::npos) end = text.size();
     ++line_number;
-    std::string line = text.substr(start, end - start);
+    std::string line(text.substr(start, end - start));
     start = end + 1;
     if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
 

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <string_view>
 #include <vector>
 
 namespace rovermap::io {
@@ -20,6 +21,10 @@ struct StampedPose {
 ///        exactly 8 finite numbers, a quaternion's norm differs from 1 by more than 1e-3, or the
 ///        timestamps are not strictly increasing. An empty file gives an empty vector.
 std::vector<StampedPose> ReadTum(const std::filesystem::path& path);
+
+/// ReadTum on text already read; `path` only names the file in messages.
+/// @throw IoError "PATH:LINE: reason" as ReadTum.
+std::vector<StampedPose> ParseTum(std::string_view text, const std::filesystem::path& path);
 
 /// Writes a TUM file (full double precision, quaternions normalised, qw >= 0), atomically.
 /// @throw IoError if it cannot be written.

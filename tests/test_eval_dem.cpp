@@ -13,6 +13,7 @@
 
 #include "tests/support/ScratchDir.hpp"
 #include "eval/DemComparison.hpp"
+#include "io/GeoTiff.hpp"
 #include "io/IoError.hpp"
 
 namespace rovermap::eval {
@@ -87,10 +88,10 @@ TEST(CompareDems, FinerDemIsAveragedIntoTheReferenceGrid) {
     return Terrain(col / 2, row / 2) + e + wiggle;
   };
   dem.sigma = [](int, int) { return 0.1f; };
-  const DemRaster reference_raster = ReadDemRaster(WriteGeoTiff("ref.tif", ref));
-  const DemRaster dem_raster = ReadDemRaster(WriteGeoTiff("dem.tif", dem));
-  EXPECT_TRUE(std::isnan(reference_raster.elevation[8 * 10 + 7]));  // nodata → NaN
-  EXPECT_EQ(dem_raster.sigma.size(), 400u);
+  const io::DemRaster reference_raster = io::ReadDemGeoTiff(WriteGeoTiff("ref.tif", ref));
+  const io::DemRaster dem_raster = io::ReadDemGeoTiff(WriteGeoTiff("dem.tif", dem));
+  EXPECT_TRUE(std::isnan(reference_raster.elevation_m[8 * 10 + 7]));  // nodata → NaN
+  EXPECT_EQ(dem_raster.stddev_m.size(), 400u);
 
   const DemComparison c = CompareDems(dem_raster, reference_raster);
   ASSERT_EQ(c.status, DemStatus::kOk) << c.message;
@@ -123,8 +124,8 @@ TEST(CompareDems, SameGridHandComputedStatistics) {
   Grid dem = ref;
   dem.elevation = [](int col, int row) { return 100.0f + static_cast<float>(row * 5 + col + 1); };
   dem.sigma = [](int, int) { return 5.0f; };
-  const DemComparison c = CompareDems(ReadDemRaster(WriteGeoTiff("dem20.tif", dem)),
-                                      ReadDemRaster(WriteGeoTiff("ref20.tif", ref)));
+  const DemComparison c = CompareDems(io::ReadDemGeoTiff(WriteGeoTiff("dem20.tif", dem)),
+                                      io::ReadDemGeoTiff(WriteGeoTiff("ref20.tif", ref)));
   ASSERT_EQ(c.status, DemStatus::kOk) << c.message;
   EXPECT_EQ(c.cells, 20u);
   EXPECT_DOUBLE_EQ(c.bias_m, 10.5);
@@ -148,8 +149,8 @@ TEST(CompareDems, FinerReferenceIsAveragedIntoTheDemGrid) {
   dem.height = 2;  // the western 2 m × 2 m
   // Reference means per DEM cell: columns 0,1 → 0.5 and 2,3 → 2.5; DEM 1 m above that.
   dem.elevation = [](int col, int) { return col == 0 ? 1.5f : 3.5f; };
-  const DemComparison c = CompareDems(ReadDemRaster(WriteGeoTiff("dem_coarse.tif", dem)),
-                                      ReadDemRaster(WriteGeoTiff("ref_fine.tif", ref)));
+  const DemComparison c = CompareDems(io::ReadDemGeoTiff(WriteGeoTiff("dem_coarse.tif", dem)),
+                                      io::ReadDemGeoTiff(WriteGeoTiff("ref_fine.tif", ref)));
   ASSERT_EQ(c.status, DemStatus::kOk) << c.message;
   EXPECT_FALSE(c.on_reference_grid);
   EXPECT_EQ(c.cells, 4u);
@@ -166,15 +167,15 @@ TEST(CompareDems, DifferentCrsIsAClearError) {
   ref.elevation = Terrain;
   Grid dem = ref;
   dem.epsg = 32634;
-  const DemComparison c = CompareDems(ReadDemRaster(WriteGeoTiff("dem34.tif", dem)),
-                                      ReadDemRaster(WriteGeoTiff("ref33.tif", ref)));
+  const DemComparison c = CompareDems(io::ReadDemGeoTiff(WriteGeoTiff("dem34.tif", dem)),
+                                      io::ReadDemGeoTiff(WriteGeoTiff("ref33.tif", ref)));
   EXPECT_EQ(c.status, DemStatus::kCrsMismatch);
   EXPECT_NE(c.message.find("dem34.tif"), std::string::npos) << c.message;
   EXPECT_NE(c.message.find("ref33.tif"), std::string::npos) << c.message;
   EXPECT_NE(c.message.find("zone 34N"), std::string::npos) << c.message;
   dem.epsg = 0;  // no CRS at all against a CRS
-  EXPECT_EQ(CompareDems(ReadDemRaster(WriteGeoTiff("dem_nocrs.tif", dem)),
-                        ReadDemRaster(WriteGeoTiff("ref33.tif", ref)))
+  EXPECT_EQ(CompareDems(io::ReadDemGeoTiff(WriteGeoTiff("dem_nocrs.tif", dem)),
+                        io::ReadDemGeoTiff(WriteGeoTiff("ref33.tif", ref)))
                 .status,
             DemStatus::kCrsMismatch);
 }
@@ -185,8 +186,8 @@ TEST(CompareDems, NoOverlapAndBadFiles) {
   ref.elevation = Terrain;
   Grid far = ref;
   far.x0 += 1000.0;
-  const DemComparison c = CompareDems(ReadDemRaster(WriteGeoTiff("far.tif", far)),
-                                      ReadDemRaster(WriteGeoTiff("ref3.tif", ref)));
+  const DemComparison c = CompareDems(io::ReadDemGeoTiff(WriteGeoTiff("far.tif", far)),
+                                      io::ReadDemGeoTiff(WriteGeoTiff("ref3.tif", ref)));
   EXPECT_EQ(c.status, DemStatus::kNoOverlap);
   EXPECT_DOUBLE_EQ(c.coverage, 0.0);
 
@@ -194,7 +195,7 @@ TEST(CompareDems, NoOverlapAndBadFiles) {
   std::ofstream(text) << "hello\n";
   for (const fs::path& bad : {text, text.parent_path() / "missing.tif"}) {
     try {
-      ReadDemRaster(bad);
+      io::ReadDemGeoTiff(bad);
       ADD_FAILURE() << "expected an IoError for " << bad;
     } catch (const io::IoError& e) {
       EXPECT_NE(std::string(e.what()).find(bad.filename().string()), std::string::npos) << e.what();

@@ -285,9 +285,9 @@ TEST(ReadTrajectory, ParseErrorsNameFileAndLine) {
   };
   const std::string ok = "0 0 0 0 0 0 0 1\n";
   const std::vector<Case> cases = {
-      {"text.tum", ok + "1 0 0 abc 0 0 0 1\n", "text.tum:2: non-numeric value 'abc'"},
-      {"nan.tum", ok + "# c\n1 0 0 nan 0 0 0 1\n", "nan.tum:3: non-finite"},
-      {"seven.tum", ok + "1 0 0 0 0 0 1\n", "seven.tum:2: 7 numbers"},
+      {"text.tum", ok + "1 0 0 abc 0 0 0 1\n", "text.tum:2: not a finite number 'abc'"},
+      {"nan.tum", ok + "# c\n1 0 0 nan 0 0 0 1\n", "nan.tum:3: not a finite number 'nan'"},
+      {"seven.tum", ok + "1 0 0 0 0 0 1\n", "seven.tum:2: 7 columns, expected 8"},
       {"nine.tum", "0 0 0 0 0 0 0 1 5\n", "nine.tum:1: 9 numbers"},
       {"quat.tum", ok + "1 0 0 0 0 0 0 2\n", "quat.tum:2: quaternion"},
       {"order.tum", ok + "1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "order.tum:3: timestamp"},
