@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -23,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "config/Config.hpp"
 #include "io/PointCloudIo.hpp"
 #include "registration/Icp.hpp"
 #include "registration/Options.hpp"
@@ -309,6 +311,9 @@ int main(int argc, char** argv) {
   plane_options.max_iterations = args.max_iterations;
   reg::RegistrationOptions p2p_options = plane_options;
   p2p_options.residual = reg::Residual::kPointToPoint;
+  reg::RegistrationOptions fast_options =
+      rovermap::config::LoadConfig(std::filesystem::path(ROVERMAP_FAST_PRESET), {}).registration;
+  fast_options.max_iterations = args.max_iterations;
 
   std::vector<Row> rows;
   for (const BenchPair& pair : pairs) {
@@ -333,6 +338,8 @@ int main(int argc, char** argv) {
     std::vector<Method> methods;
     methods.push_back({"rovermap point-to-plane (default)",
                        [&] { return RunRovermap(pair, plane_options); }, nullptr});
+    methods.push_back({"rovermap fast preset",
+                       [&] { return RunRovermap(pair, fast_options); }, nullptr});
     methods.push_back({"rovermap point-to-point (paper)",
                        [&] { return RunRovermap(pair, p2p_options); }, nullptr});
 #ifdef ROVERMAP_BENCH_PEERS

@@ -66,6 +66,8 @@ std::vector<KeyEntry> BuildRegistry() {
              "Theta: max normal/tangent angle; 0 = off");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),
           "PCA normal neighbours if the cloud has none");
+  reg.Double("sample_voxel_factor", &R::sample_voxel_factor, "x D", AtLeast(0),
+             "match one source point per voxel of this edge; 0 = all points");
   reg.Bool("coarse_to_fine", &R::coarse_to_fine, "subsample the source for the first iterations");
   reg.Int("coarse_iterations", &R::coarse_iterations, "count", AtLeast(0),
           "iterations on the subsampled source");

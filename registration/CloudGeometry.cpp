@@ -6,35 +6,57 @@
 
 namespace rovermap::registration {
 
-std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>& points,
-                                             const KdTree& tree, int k) {
-  std::vector<Eigen::Vector3d> normals(points.size(), Eigen::Vector3d::Zero());
-  const auto n = static_cast<long>(points.size());
+namespace {
+
+// PCA normal of point i from its k nearest neighbours (zero when the neighbourhood is
+// degenerate); `indices` and `dists` are caller buffers of k entries.
+Eigen::Vector3d PcaNormal(const std::vector<Eigen::Vector3d>& points, const KdTree& tree,
+                          std::size_t i, std::size_t k, std::size_t* indices, double* dists) {
+  const std::size_t found = tree.FindKNearest(points[i], k, indices, dists);
+  if (found < 3) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < found; ++j) mean += points[indices[j]];
+  mean /= static_cast<double>(found);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t j = 0; j < found; ++j) {
+    const Eigen::Vector3d d = points[indices[j]] - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);  // closed form for 3×3: several times faster than iterating
+  // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
+  if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) {
+    return Eigen::Vector3d::Zero();
+  }
+  return eig.eigenvectors().col(0).normalized();
+}
+
+}  // namespace
+
+void EstimateNormalsAt(const std::vector<Eigen::Vector3d>& points, const KdTree& tree, int k,
+                       const std::vector<std::size_t>& which, std::vector<Eigen::Vector3d>* normals) {
+  normals->resize(points.size(), Eigen::Vector3d::Zero());
+  const auto n = static_cast<long>(which.size());
   const auto k_size = static_cast<std::size_t>(std::max(k, 0));
-#pragma omp parallel
+#pragma omp parallel if (n > 256)
   {
     // Per-thread neighbour buffers: no allocation per point.
     std::vector<std::size_t> indices(k_size);
     std::vector<double> dists(k_size);
 #pragma omp for schedule(dynamic, 256)
-    for (long i = 0; i < n; ++i) {
-      const std::size_t found = tree.FindKNearest(points[i], k_size, indices.data(), dists.data());
-      if (found < 3) continue;
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (std::size_t j = 0; j < found; ++j) mean += points[indices[j]];
-      mean /= static_cast<double>(found);
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (std::size_t j = 0; j < found; ++j) {
-        const Eigen::Vector3d d = points[indices[j]] - mean;
-        cov += d * d.transpose();
-      }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-      eig.computeDirect(cov);  // closed form for 3×3: several times faster than iterating
-      // A degenerate neighbourhood (all coincident or collinear) has no defined normal.
-      if (eig.eigenvalues()(1) <= 1e-12 * std::max(1.0, eig.eigenvalues()(2))) continue;
-      normals[static_cast<std::size_t>(i)] = eig.eigenvectors().col(0).normalized();
+    for (long q = 0; q < n; ++q) {
+      const std::size_t i = which[static_cast<std::size_t>(q)];
+      (*normals)[i] = PcaNormal(points, tree, i, k_size, indices.data(), dists.data());
     }
   }
+}
+
+std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>& points,
+                                             const KdTree& tree, int k) {
+  std::vector<std::size_t> all(points.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::vector<Eigen::Vector3d> normals;
+  EstimateNormalsAt(points, tree, k, all, &normals);
   return normals;
 }
 
@@ -70,9 +92,12 @@ double MedianNeighborSpacing(const std::vector<Eigen::Vector3d>& points, const K
   spacing.reserve(points.size() / step + 1);
   for (std::size_t i = 0; i < points.size(); i += step) {
     // A few neighbours so that exact duplicates do not hide the real spacing.
-    for (const auto& nb : tree.FindKNearest(points[i], 4)) {
-      if (nb.squared_distance > 0.0) {
-        spacing.push_back(std::sqrt(nb.squared_distance));
+    std::size_t indices[4];
+    double dists[4];
+    const std::size_t found = tree.FindKNearest(points[i], 4, indices, dists);
+    for (std::size_t j = 0; j < found; ++j) {
+      if (dists[j] > 0.0) {
+        spacing.push_back(std::sqrt(dists[j]));
         break;
       }
     }

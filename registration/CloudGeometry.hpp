@@ -14,6 +14,12 @@ namespace rovermap::registration {
 std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<Eigen::Vector3d>& points,
                                              const KdTree& tree, int k);
 
+/// The same for the points listed in `which` only (the matcher needs normals of the points it
+/// samples and matches, often a small part of the cloud). `normals` is resized to the cloud's
+/// size; other entries are left as they are.
+void EstimateNormalsAt(const std::vector<Eigen::Vector3d>& points, const KdTree& tree, int k,
+                       const std::vector<std::size_t>& which, std::vector<Eigen::Vector3d>* normals);
+
 /// Unit tangents of curves from the neighbours along each chain (central differences,
 /// one-sided at chain ends). Without chain ids all points form one chain. Isolated points
 /// get a zero vector (no orientation).

@@ -8,6 +8,7 @@
 
 #include "registration/CloudGeometry.hpp"
 #include "registration/MotionSolver.hpp"
+#include "registration/VoxelGrid.hpp"
 
 namespace rovermap::registration {
 namespace {
@@ -27,39 +28,51 @@ struct Match {
   bool backward = false;  // found by a target -> source query (symmetric criterion)
 };
 
-// Closest points of every `step`-th point of `from`, mapped by T_to_from, in `to`,
-// within `dmax` and passing the orientation test (Zhang 1994, §4.1 and §4.2).
+// Closest points in `to` of every `step`-th `from` point listed in `queries`, mapped by
+// T_to_from, within `dmax`, then the orientation test (Zhang 1994, §4.1 and §4.2).
 // `hints` holds, per point of `from`, its previous closest point in `to` (warm start for the
-// bounded search, updated here); the result does not depend on it.
+// bounded search, updated here); the result does not depend on it. With `need_orientations`
+// the matched `to` points' orientations are made available (the queried `from` points' must
+// already be, for the orientation test).
 void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
                     const Eigen::Isometry3d& T_to_from, double dmax, double min_abs_cos,
-                    std::size_t step, bool backward, std::vector<std::size_t>* hints,
+                    const std::vector<std::size_t>& queries, std::size_t step, bool backward,
+                    bool need_orientations, std::vector<std::size_t>* hints,
                     std::vector<Match>* out) {
   const auto& pts = from.cloud().points;
-  const long queries = static_cast<long>((pts.size() + step - 1) / step);
-  std::vector<Match> local(static_cast<std::size_t>(queries));
-  std::vector<char> valid(static_cast<std::size_t>(queries), 0);
-  const bool check_orientation = min_abs_cos > 0.0;
-  const Eigen::Matrix3d rotation = T_to_from.linear();
+  const long count = static_cast<long>((queries.size() + step - 1) / step);
+  std::vector<Match> local(static_cast<std::size_t>(count));
+  std::vector<char> valid(static_cast<std::size_t>(count), 0);
+  // Here source_index is the `from` point and target_index the `to` point.
 #pragma omp parallel for schedule(dynamic, 512)
-  for (long q = 0; q < queries; ++q) {
-    const std::size_t i = static_cast<std::size_t>(q) * step;
+  for (long q = 0; q < count; ++q) {
+    const std::size_t i = queries[static_cast<std::size_t>(q) * step];
     const Neighbor nb = to.tree().FindClosest(T_to_from * pts[i], dmax, (*hints)[i]);
     if (!nb.found) continue;
     (*hints)[i] = nb.index;
-    if (check_orientation) {
-      const Eigen::Vector3d& a = from.orientations()[i];
-      const Eigen::Vector3d& b = to.orientations()[nb.index];
+    local[static_cast<std::size_t>(q)] = Match{i, nb.index, std::sqrt(nb.squared_distance), backward};
+    valid[static_cast<std::size_t>(q)] = 1;
+  }
+  std::size_t found = 0;
+  for (std::size_t k = 0; k < local.size(); ++k)
+    if (valid[k]) local[found++] = local[k];
+  local.resize(found);
+  if (need_orientations) {
+    std::vector<std::size_t> matched(found);
+    for (std::size_t k = 0; k < found; ++k) matched[k] = local[k].target_index;
+    to.RequireOrientations(matched);
+  }
+  const Eigen::Matrix3d rotation = T_to_from.linear();
+  for (Match m : local) {
+    if (min_abs_cos > 0.0) {
+      const Eigen::Vector3d& a = from.orientation(m.source_index);
+      const Eigen::Vector3d& b = to.orientation(m.target_index);
       // Unknown orientation (zero vector) cannot be tested: keep the pair.
       if (!a.isZero() && !b.isZero() && std::abs((rotation * a).dot(b)) < min_abs_cos) continue;
     }
-    const auto k = static_cast<std::size_t>(q);
-    local[k] = backward ? Match{nb.index, i, std::sqrt(nb.squared_distance), true}
-                        : Match{i, nb.index, std::sqrt(nb.squared_distance), false};
-    valid[k] = 1;
+    if (backward) std::swap(m.source_index, m.target_index);
+    out->push_back(m);
   }
-  for (std::size_t k = 0; k < local.size(); ++k)
-    if (valid[k]) out->push_back(local[k]);
 }
 
 // Combined covariance of a pair's residual, R Λx Rᵀ + Λy (§4.4), plus an isotropic
@@ -78,8 +91,8 @@ Eigen::Matrix3d PairCovariance(const PointCloud& source, const PointCloud& targe
 // backward (target -> source) pair. Zero when unknown.
 Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
                            const Eigen::Matrix3d& rotation) {
-  return m.backward ? Eigen::Vector3d(rotation * source.orientations()[m.source_index])
-                    : target.orientations()[m.target_index];
+  return m.backward ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
+                    : target.orientation(m.target_index);
 }
 
 // Step d: a pair is kept within Dmax, or with use_uncertainty within the χ² gate on the
@@ -183,7 +196,7 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
     j.leftCols<3>() << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;  // −[p]×
     j.rightCols<3>().setIdentity();
     if (plane) {
-      const Eigen::Vector3d& nrm = target.orientations()[m.target_index];
+      const Eigen::Vector3d& nrm = target.orientation(m.target_index);
       if (nrm.isZero()) continue;
       const Eigen::Matrix<double, 1, 6> jp = nrm.transpose() * j;
       const double e = nrm.dot(d);
@@ -240,16 +253,32 @@ const char* ToString(RegistrationStatus status) {
 }
 
 IndexedCloud::IndexedCloud(PointCloud cloud, const RegistrationOptions& options)
-    : cloud_(std::move(cloud)), tree_(std::make_unique<KdTree>(cloud_.points)) {
-  if (NeedsOrientations(options)) {
-    if (options.geometry == Geometry::kCurve) {
-      orientations_ = EstimateTangents(cloud_);
-    } else if (cloud_.HasNormals()) {
-      orientations_ = cloud_.normals;
-    } else {
-      orientations_ = EstimateNormals(cloud_.points, *tree_, options.normal_neighbors);
+    : cloud_(std::move(cloud)),
+      tree_(std::make_unique<KdTree>(cloud_.points)),
+      normal_neighbors_(options.normal_neighbors) {
+  if (!NeedsOrientations(options)) return;
+  if (options.geometry == Geometry::kCurve) {
+    orientations_ = EstimateTangents(cloud_);
+  } else if (cloud_.HasNormals()) {
+    orientations_ = cloud_.normals;
+  } else {
+    orientations_.assign(cloud_.size(), Eigen::Vector3d::Zero());
+    known_.assign(cloud_.size(), 0);
+  }
+}
+
+void IndexedCloud::RequireOrientations(const std::vector<std::size_t>& indices) const {
+  if (known_.empty()) return;
+  const std::lock_guard<std::mutex> lock(orientation_mutex_);
+  std::vector<std::size_t> missing;
+  for (const std::size_t i : indices) {
+    if (i < known_.size() && !known_[i]) {
+      known_[i] = 1;
+      missing.push_back(i);
     }
   }
+  if (!missing.empty())
+    EstimateNormalsAt(cloud_.points, *tree_, normal_neighbors_, missing, &orientations_);
 }
 
 double IndexedCloud::spacing() const {
@@ -281,9 +310,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     result.message = "use_uncertainty needs per-point covariances in both clouds";
     return result;
   }
-  if (NeedsOrientations(options) &&
-      (target.orientations().size() != target.cloud().size() ||
-       source.orientations().size() != source.cloud().size())) {
+  if (NeedsOrientations(options) && (!target.HasOrientations() || !source.HasOrientations())) {
     result.status = RegistrationStatus::kInvalidInput;
     result.message = "clouds were indexed without orientations the options need";
     return result;
@@ -307,6 +334,18 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   const double translation_tol =
       options.translation_tolerance_m > 0.0 ? options.translation_tolerance_m : d_ref / 100.0;
 
+  // The source points that are matched: one per voxel of edge sample_voxel_factor · D.
+  const double voxel_m = options.sample_voxel_factor > 0.0 ? options.sample_voxel_factor * d_ref : 0.0;
+  const std::vector<std::size_t> source_sample = VoxelSample(source.cloud().points, voxel_m);
+  const std::vector<std::size_t> target_sample =
+      symmetric ? VoxelSample(target.cloud().points, voxel_m) : std::vector<std::size_t>();
+  result.sample_points = source_sample.size();
+  const bool need_orientations = NeedsOrientations(options);
+  if (min_abs_cos > 0.0) {
+    source.RequireOrientations(source_sample);
+    target.RequireOrientations(target_sample);
+  }
+
   Eigen::Isometry3d T = T_init;
   constexpr std::size_t kNoHint = std::numeric_limits<std::size_t>::max();
   std::vector<std::size_t> forward_hints(source.cloud().size(), kNoHint);
@@ -322,12 +361,13 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
     // a. Closest points within Dmax, both ways for the symmetric criterion.
     matches.clear();
-    MatchDirection(source, target, T, dmax, min_abs_cos, step, false, &forward_hints, &matches);
-    std::size_t queries = (source.cloud().size() + step - 1) / step;
+    MatchDirection(source, target, T, dmax, min_abs_cos, source_sample, step, false,
+                   need_orientations, &forward_hints, &matches);
+    std::size_t queries = (source_sample.size() + step - 1) / step;
     if (symmetric) {
-      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, step, true, &backward_hints,
-                     &matches);
-      queries += (target.cloud().size() + step - 1) / step;
+      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, target_sample, step, true,
+                     need_orientations, &backward_hints, &matches);
+      queries += (target_sample.size() + step - 1) / step;
     }
 
     // b, c. Statistics of the distances and the new Dmax.
@@ -426,7 +466,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
   // Final pairs at the final estimate: inliers, RMS, information.
   matches.clear();
-  MatchDirection(source, target, T, dmax, min_abs_cos, 1, false, &forward_hints, &matches);
+  MatchDirection(source, target, T, dmax, min_abs_cos, source_sample, 1, false, need_orientations,
+                 &forward_hints, &matches);
   std::size_t kept = 0;
   double sum_sq = 0.0;
   for (const Match& m : matches) {
@@ -436,7 +477,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   }
   matches.resize(kept);
   result.inliers = kept;
-  result.inlier_ratio = static_cast<double>(kept) / static_cast<double>(source.cloud().size());
+  result.inlier_ratio =
+      source_sample.empty() ? 0.0 : static_cast<double>(kept) / static_cast<double>(source_sample.size());
   result.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
   ComputeInformation(source, target, matches, T, sampling_variance, options, &result);
   return result;

@@ -17,25 +17,39 @@ namespace rovermap::registration {
 /// A cloud with its k-d tree and the orientations the options need (normals for surfaces,
 /// tangents for curves). Built once per cloud: in a sequence, frame k's source index is
 /// frame k+1's target index.
+///
+/// PCA normals are estimated on demand (RequireOrientations): registration samples the
+/// source and matches only part of the target, so most normals would never be read.
 class IndexedCloud {
  public:
-  /// Builds the tree; estimates orientations when `options` use them (orientation test,
-  /// point-to-plane residual) and the cloud has none.
+  /// Builds the tree. Tangents (curves) are computed here; normals come from the cloud when
+  /// it has them, otherwise on demand, when `options` use orientations (orientation test,
+  /// point-to-plane residual).
   IndexedCloud(PointCloud cloud, const RegistrationOptions& options);
   IndexedCloud(const IndexedCloud&) = delete;
   IndexedCloud& operator=(const IndexedCloud&) = delete;
 
   const PointCloud& cloud() const { return cloud_; }
   const KdTree& tree() const { return *tree_; }
-  /// Unit orientations (zero vector = unknown); empty when not needed.
-  const std::vector<Eigen::Vector3d>& orientations() const { return orientations_; }
+  /// Whether this cloud carries orientations (given, tangents or on-demand normals).
+  bool HasOrientations() const { return !orientations_.empty(); }
+  /// Makes the orientations of `indices` available (estimates the missing normals in
+  /// parallel). Safe to call from several threads; each index is estimated once.
+  void RequireOrientations(const std::vector<std::size_t>& indices) const;
+  /// Unit orientation of point i (zero vector = unknown). Valid once i has been required.
+  const Eigen::Vector3d& orientation(std::size_t i) const { return orientations_[i]; }
   /// Median nearest-neighbour spacing [m], computed on first use (only needed for D = 0).
   double spacing() const;
 
  private:
   PointCloud cloud_;
   std::unique_ptr<KdTree> tree_;
-  std::vector<Eigen::Vector3d> orientations_;
+  int normal_neighbors_ = 0;
+  // Entries are written once, under the mutex, before `known_` says so; a thread reads only
+  // entries it has required, so reads never race with the writes.
+  mutable std::vector<Eigen::Vector3d> orientations_;
+  mutable std::vector<unsigned char> known_;  // empty: all known
+  mutable std::mutex orientation_mutex_;
   mutable std::once_flag spacing_once_;
   mutable double spacing_ = 0.0;
 };
@@ -71,8 +85,9 @@ struct RegistrationResult {
   bool converged = false;
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   int iterations = 0;
-  std::size_t inliers = 0;          ///< pairs within the final Dmax / gate at the final T
-  double inlier_ratio = 0.0;        ///< inliers / source points: low means little overlap found
+  std::size_t sample_points = 0;    ///< source points matched (voxel sample, see Options)
+  std::size_t inliers = 0;          ///< sampled points paired within the final Dmax / gate
+  double inlier_ratio = 0.0;        ///< inliers / sample_points: low means little overlap found
   double rms_m = 0.0;               ///< RMS distance of those pairs [m]
   double dmax_m = 0.0;              ///< final Dmax [m]
   double reference_distance_m = 0.0;  ///< D as used (given or derived) [m]

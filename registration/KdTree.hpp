@@ -14,10 +14,13 @@ struct Neighbor {
   double squared_distance = 0.0;  ///< [m^2]
 };
 
-/// 3-D k-d tree over a point set, the only contact with nanoflann (its 1.4/1.5 API
-/// differences stay in KdTree.cpp).
+/// 3-D k-d tree over a point set, written for the matcher (bench/bench_kdtree compares it
+/// with nanoflann): balanced median splits on the widest extent, an implicit node layout,
+/// leaves stored contiguously, built in parallel, searched nearest-first with the
+/// incremental cell distance.
 ///
-/// The points are referenced, not copied: they must outlive the tree and stay unchanged.
+/// The points are copied into leaf order; the caller's vector must still outlive the tree
+/// (hints are read from it) and stay unchanged.
 class KdTree {
  public:
   /// Builds the tree (O(n log n)). An empty set gives a tree that never matches.

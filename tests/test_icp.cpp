@@ -12,7 +12,11 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <thread>
+
+#include "registration/CloudGeometry.hpp"
 #include "registration/Icp.hpp"
+#include "registration/VoxelGrid.hpp"
 #include "tests/support/SyntheticScenes.hpp"
 
 using namespace rovermap::registration;
@@ -76,7 +80,10 @@ TEST(Icp, TerrainRecoveredWithDefaults) {
     // D derived from the data: the median spacing of a 6 cm grid seen at a slant.
     EXPECT_GT(r.reference_distance_m, 0.04);
     EXPECT_LT(r.reference_distance_m, 0.07);
-    EXPECT_GT(r.inliers, p.source.size() / 2);
+    // One source point per D-sized voxel: most points survive on an even grid.
+    EXPECT_LE(r.sample_points, p.source.size());
+    EXPECT_GT(r.sample_points, p.source.size() / 2);
+    EXPECT_GT(r.inliers, r.sample_points / 2);
   }
 }
 
@@ -210,7 +217,7 @@ TEST(Icp, CoarseToFineSavesQueries) {
   o.coarse_to_fine = true;
   const RegistrationResult c2f = Register(p.source, p.target, init, o);
   EXPECT_LT(TotalQueries(c2f), 0.8 * TotalQueries(fine));
-  EXPECT_EQ(c2f.trace.front().queries, (p.source.size() + 9) / 10);
+  EXPECT_EQ(c2f.trace.front().queries, (c2f.sample_points + 9) / 10);
   const auto [rot, trans] = PoseError(c2f.T_target_source, p.T_target_source);
   EXPECT_LT(rot, 0.1);
   EXPECT_LT(trans, 0.01);
@@ -249,6 +256,9 @@ TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
     const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
     RegistrationOptions o;
     o.residual = Residual::kPointToPoint;
+    // Every point: the voxel sample thins the dense, accurate near field, which is what the
+    // weighting exploits (the effect is measured on the full cloud).
+    o.sample_voxel_factor = 0.0;
     const RegistrationResult plain = Register(p.source, p.target, init, o);
     o.use_uncertainty = true;
     const RegistrationResult weighted = Register(p.source, p.target, init, o);
@@ -301,4 +311,64 @@ TEST(Icp, StatusReportsFailures) {
   o.use_uncertainty = true;
   EXPECT_EQ(Register(no_cov, p.target, p.T_target_source, o).status,
             RegistrationStatus::kInvalidInput);
+}
+
+// Normals are estimated on demand, only for the points registration touches, and come out
+// exactly as the eager all-points estimate would.
+TEST(Icp, OnDemandNormalsEqualTheEagerOnesAndAreComputedOnlyWhereNeeded) {
+  const ScenePair p = MakeTerrainPair(Terrain(8));
+  const RegistrationOptions o;
+  const IndexedCloud cloud(p.target, o);
+  ASSERT_TRUE(cloud.HasOrientations());
+  const std::vector<Eigen::Vector3d> eager =
+      EstimateNormals(cloud.cloud().points, cloud.tree(), o.normal_neighbors);
+  std::vector<std::size_t> half;
+  for (std::size_t i = 0; i < cloud.cloud().size(); i += 2) half.push_back(i);
+  cloud.RequireOrientations(half);
+  std::size_t known = 0;
+  for (std::size_t i = 0; i < cloud.cloud().size(); ++i) {
+    if (i % 2 == 0) {
+      EXPECT_EQ(cloud.orientation(i), eager[i]) << i;
+    } else {
+      known += !cloud.orientation(i).isZero();
+    }
+  }
+  EXPECT_EQ(known, 0u) << "odd points were never required";
+
+  // Several threads requiring overlapping sets get the same normals.
+  const IndexedCloud shared(p.target, o);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&shared, t] {
+      std::vector<std::size_t> some;
+      for (std::size_t i = static_cast<std::size_t>(t); i < shared.cloud().size(); i += 3)
+        some.push_back(i);
+      shared.RequireOrientations(some);
+    });
+  }
+  for (auto& t : threads) t.join();
+  for (std::size_t i = 0; i < shared.cloud().size(); ++i) EXPECT_EQ(shared.orientation(i), eager[i]);
+}
+
+// The voxel sample: its size is reported, 0 means every point, and a coarser sample still
+// registers the terrain (fewer queries per iteration).
+TEST(Icp, VoxelSampleIsUsedAndReported) {
+  const ScenePair p = MakeTerrainPair(Terrain(9));
+  const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+  RegistrationOptions o;
+  o.sample_voxel_factor = 0.0;
+  const RegistrationResult all = Register(p.source, p.target, init, o);
+  EXPECT_EQ(all.sample_points, p.source.size());
+  EXPECT_EQ(all.trace.front().queries, p.source.size());
+  o.sample_voxel_factor = 3.0;
+  const RegistrationResult coarse = Register(p.source, p.target, init, o);
+  EXPECT_EQ(coarse.sample_points,
+            VoxelSample(p.source.points, 3.0 * coarse.reference_distance_m).size());
+  EXPECT_LT(coarse.sample_points, p.source.size() / 3);
+  EXPECT_EQ(coarse.trace.front().queries, coarse.sample_points);
+  EXPECT_LE(coarse.inliers, coarse.sample_points);
+  const auto [rot, trans] = PoseError(coarse.T_target_source, p.T_target_source);
+  EXPECT_TRUE(coarse.converged);
+  EXPECT_LT(rot, 0.15);
+  EXPECT_LT(trans, 0.015);
 }

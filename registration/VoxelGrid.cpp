@@ -1,0 +1,90 @@
+#include "registration/VoxelGrid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace rovermap::registration {
+namespace {
+
+std::size_t Hash(const Eigen::Vector3i& c) {
+  // Teschner et al. 2003 spatial hash, widened to 64 bits.
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) * 73856093ull) ^
+         (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) * 19349663ull) ^
+         (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())) * 83492791ull);
+}
+
+std::size_t TableSize(std::size_t cells) {
+  std::size_t size = 16;
+  while (size < 2 * cells) size *= 2;
+  return size;
+}
+
+int ClampedFloor(double v) {
+  const double f = std::floor(v);
+  if (!(f > std::numeric_limits<int>::min())) return std::numeric_limits<int>::min();
+  if (!(f < std::numeric_limits<int>::max())) return std::numeric_limits<int>::max();
+  return static_cast<int>(f);
+}
+
+}  // namespace
+
+VoxelGrid::VoxelGrid(double edge_m, std::size_t expected_cells)
+    : edge_(edge_m), table_(TableSize(expected_cells)) {}
+
+Eigen::Vector3i VoxelGrid::Cell(const Eigen::Vector3d& p) const {
+  return Eigen::Vector3i(ClampedFloor(p.x() / edge_), ClampedFloor(p.y() / edge_),
+                         ClampedFloor(p.z() / edge_));
+}
+
+Eigen::Vector3d VoxelGrid::Centre(const Eigen::Vector3i& cell) const {
+  return (cell.cast<double>().array() + 0.5).matrix() * edge_;
+}
+
+std::size_t VoxelGrid::Insert(const Eigen::Vector3d& p) {
+  if (2 * (cells_ + 1) > table_.size()) Grow();
+  const Eigen::Vector3i cell = Cell(p);
+  const std::size_t mask = table_.size() - 1;
+  for (std::size_t h = Hash(cell) & mask;; h = (h + 1) & mask) {
+    Slot& s = table_[h];
+    if (s.id == kEmpty) {
+      s.cell = cell;
+      s.id = static_cast<std::uint32_t>(cells_++);
+      return s.id;
+    }
+    if (s.cell == cell) return s.id;
+  }
+}
+
+void VoxelGrid::Grow() {
+  std::vector<Slot> old(table_.size() * 2);
+  old.swap(table_);
+  const std::size_t mask = table_.size() - 1;
+  for (const Slot& s : old) {
+    if (s.id == kEmpty) continue;
+    std::size_t h = Hash(s.cell) & mask;
+    while (table_[h].id != kEmpty) h = (h + 1) & mask;
+    table_[h] = s;
+  }
+}
+
+std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m) {
+  std::vector<std::size_t> sample;
+  if (!(edge_m > 0.0)) {
+    sample.resize(points.size());
+    std::iota(sample.begin(), sample.end(), std::size_t{0});
+    return sample;
+  }
+  VoxelGrid grid(edge_m, points.size() / 4 + 1);
+  // The first point of each cell, in input order: choosing by position (say, nearest the
+  // centre) would favour points whose noise pulls them towards the centre and bias the
+  // sampled surface.
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    if (grid.Insert(points[i]) == sample.size()) sample.push_back(i);
+  }
+  return sample;
+}
+
+}  // namespace rovermap::registration

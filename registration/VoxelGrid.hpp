@@ -1,0 +1,48 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace rovermap::registration {
+
+/// Dense ids for the occupied cells of a cubic voxel grid: an open-addressing hash of the
+/// integer cell coordinates (a few times faster than std::unordered_map at one point per
+/// insert, which is the hot path of sampling a frame).
+class VoxelGrid {
+ public:
+  /// `edge_m` > 0 [m]; `expected_cells` sizes the table (it grows when needed).
+  VoxelGrid(double edge_m, std::size_t expected_cells);
+
+  /// Id (0, 1, 2, ... in order of first touch) of the cell holding `p`.
+  std::size_t Insert(const Eigen::Vector3d& p);
+  /// Integer coordinates of the cell holding `p` (clamped to the int32 range).
+  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const;
+  /// Centre of a cell [m].
+  Eigen::Vector3d Centre(const Eigen::Vector3i& cell) const;
+
+  std::size_t size() const { return cells_; }
+  double edge() const { return edge_; }
+
+ private:
+  struct Slot {
+    Eigen::Vector3i cell;
+    std::uint32_t id = kEmpty;
+  };
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+
+  void Grow();
+
+  double edge_;
+  std::vector<Slot> table_;  // power-of-two size, at most half full
+  std::size_t cells_ = 0;
+};
+
+/// One representative per occupied voxel of edge `edge_m` (the first in input order), so the
+/// sample is spread evenly whatever the input density (stereo clouds are far denser near the
+/// camera). Indices into `points`, ascending; non-finite points are skipped. `edge_m` <= 0:
+/// all points.
+std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m);
+
+}  // namespace rovermap::registration
