@@ -116,6 +116,7 @@ int RunRegister(const RegisterArgs& args) {
       {"converged", r.converged},
       {"status", registration::ToString(r.status)},
       {"iterations", r.iterations},
+      {"sample_points", r.sample_points},
       {"inliers", r.inliers},
       {"inlier_ratio", r.inlier_ratio},
       {"rms", r.rms_m},

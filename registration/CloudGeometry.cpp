@@ -88,20 +88,25 @@ double MedianNeighborSpacing(const std::vector<Eigen::Vector3d>& points, const K
                              std::size_t max_samples) {
   if (points.size() < 2) return 0.0;
   const std::size_t step = std::max<std::size_t>(1, points.size() / std::max<std::size_t>(1, max_samples));
-  std::vector<double> spacing;
-  spacing.reserve(points.size() / step + 1);
-  for (std::size_t i = 0; i < points.size(); i += step) {
+  const auto samples = static_cast<long>((points.size() + step - 1) / step);
+  // Per sample: the distance to the nearest other point, NaN if only duplicates are near.
+  std::vector<double> spacing(static_cast<std::size_t>(samples), std::nan(""));
+#pragma omp parallel for schedule(static) if (samples > 512)
+  for (long s = 0; s < samples; ++s) {
     // A few neighbours so that exact duplicates do not hide the real spacing.
     std::size_t indices[4];
     double dists[4];
-    const std::size_t found = tree.FindKNearest(points[i], 4, indices, dists);
+    const std::size_t found =
+        tree.FindKNearest(points[static_cast<std::size_t>(s) * step], 4, indices, dists);
     for (std::size_t j = 0; j < found; ++j) {
       if (dists[j] > 0.0) {
-        spacing.push_back(std::sqrt(dists[j]));
+        spacing[static_cast<std::size_t>(s)] = std::sqrt(dists[j]);
         break;
       }
     }
   }
+  spacing.erase(std::remove_if(spacing.begin(), spacing.end(), [](double d) { return std::isnan(d); }),
+                spacing.end());
   if (spacing.empty()) return 0.0;
   auto mid = spacing.begin() + static_cast<long>(spacing.size() / 2);
   std::nth_element(spacing.begin(), mid, spacing.end());

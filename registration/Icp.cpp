@@ -43,11 +43,12 @@ void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
   const long count = static_cast<long>((queries.size() + step - 1) / step);
   std::vector<Match> local(static_cast<std::size_t>(count));
   std::vector<char> valid(static_cast<std::size_t>(count), 0);
+  const KdTree& tree = to.tree();  // built here, outside the parallel loop, if not yet
   // Here source_index is the `from` point and target_index the `to` point.
 #pragma omp parallel for schedule(dynamic, 512)
   for (long q = 0; q < count; ++q) {
     const std::size_t i = queries[static_cast<std::size_t>(q) * step];
-    const Neighbor nb = to.tree().FindClosest(T_to_from * pts[i], dmax, (*hints)[i]);
+    const Neighbor nb = tree.FindClosest(T_to_from * pts[i], dmax, (*hints)[i]);
     if (!nb.found) continue;
     (*hints)[i] = nb.index;
     local[static_cast<std::size_t>(q)] = Match{i, nb.index, std::sqrt(nb.squared_distance), backward};
@@ -253,9 +254,7 @@ const char* ToString(RegistrationStatus status) {
 }
 
 IndexedCloud::IndexedCloud(PointCloud cloud, const RegistrationOptions& options)
-    : cloud_(std::move(cloud)),
-      tree_(std::make_unique<KdTree>(cloud_.points)),
-      normal_neighbors_(options.normal_neighbors) {
+    : cloud_(std::move(cloud)), normal_neighbors_(options.normal_neighbors) {
   if (!NeedsOrientations(options)) return;
   if (options.geometry == Geometry::kCurve) {
     orientations_ = EstimateTangents(cloud_);
@@ -278,11 +277,16 @@ void IndexedCloud::RequireOrientations(const std::vector<std::size_t>& indices) 
     }
   }
   if (!missing.empty())
-    EstimateNormalsAt(cloud_.points, *tree_, normal_neighbors_, missing, &orientations_);
+    EstimateNormalsAt(cloud_.points, tree(), normal_neighbors_, missing, &orientations_);
+}
+
+const KdTree& IndexedCloud::tree() const {
+  std::call_once(tree_once_, [this] { tree_ = std::make_unique<KdTree>(cloud_.points); });
+  return *tree_;
 }
 
 double IndexedCloud::spacing() const {
-  std::call_once(spacing_once_, [this] { spacing_ = MedianNeighborSpacing(cloud_.points, *tree_); });
+  std::call_once(spacing_once_, [this] { spacing_ = MedianNeighborSpacing(cloud_.points, tree()); });
   return spacing_;
 }
 

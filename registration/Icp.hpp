@@ -22,15 +22,17 @@ namespace rovermap::registration {
 /// source and matches only part of the target, so most normals would never be read.
 class IndexedCloud {
  public:
-  /// Builds the tree. Tangents (curves) are computed here; normals come from the cloud when
-  /// it has them, otherwise on demand, when `options` use orientations (orientation test,
-  /// point-to-plane residual).
+  /// Tangents (curves) are computed here; normals come from the cloud when it has them,
+  /// otherwise on demand, when `options` use orientations (orientation test, point-to-plane
+  /// residual). The tree is built on first use.
   IndexedCloud(PointCloud cloud, const RegistrationOptions& options);
   IndexedCloud(const IndexedCloud&) = delete;
   IndexedCloud& operator=(const IndexedCloud&) = delete;
 
   const PointCloud& cloud() const { return cloud_; }
-  const KdTree& tree() const { return *tree_; }
+  /// The k-d tree, built on first use (a source that needs no normals never needs one).
+  /// Safe to call from several threads.
+  const KdTree& tree() const;
   /// Whether this cloud carries orientations (given, tangents or on-demand normals).
   bool HasOrientations() const { return !orientations_.empty(); }
   /// Makes the orientations of `indices` available (estimates the missing normals in
@@ -43,7 +45,8 @@ class IndexedCloud {
 
  private:
   PointCloud cloud_;
-  std::unique_ptr<KdTree> tree_;
+  mutable std::unique_ptr<KdTree> tree_;
+  mutable std::once_flag tree_once_;
   int normal_neighbors_ = 0;
   // Entries are written once, under the mutex, before `known_` says so; a thread reads only
   // entries it has required, so reads never race with the writes.

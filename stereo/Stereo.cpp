@@ -8,8 +8,9 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <unordered_map>
 #include <vector>
+
+#include "registration/VoxelGrid.hpp"
 
 namespace rovermap::stereo {
 namespace {
@@ -278,25 +279,13 @@ std::size_t VoxelDownsample(registration::PointCloud* cloud, double voxel_size_m
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     std::size_t count = 0;
   };
-  struct KeyHash {
-    std::size_t operator()(const Eigen::Vector3i& k) const {
-      return (static_cast<std::size_t>(k.x()) * 73856093u) ^
-             (static_cast<std::size_t>(k.y()) * 19349663u) ^
-             (static_cast<std::size_t>(k.z()) * 83492791u);
-    }
-  };
-  struct KeyEqual {
-    bool operator()(const Eigen::Vector3i& a, const Eigen::Vector3i& b) const { return a == b; }
-  };
-  std::unordered_map<Eigen::Vector3i, std::size_t, KeyHash, KeyEqual> index;
+  registration::VoxelGrid grid(voxel_size_m, cloud->size() / 4 + 1);
   std::vector<Accumulator> voxels;
-  index.reserve(cloud->size());
   for (std::size_t i = 0; i < cloud->size(); ++i) {
     const Eigen::Vector3d& p = cloud->points[i];
-    const Eigen::Vector3i key = (p / voxel_size_m).array().floor().cast<int>();
-    const auto [it, inserted] = index.emplace(key, voxels.size());
-    if (inserted) voxels.emplace_back();
-    Accumulator& a = voxels[it->second];
+    const std::size_t id = grid.Insert(p);
+    if (id == voxels.size()) voxels.emplace_back();
+    Accumulator& a = voxels[id];
     Eigen::Matrix3d info = Eigen::Matrix3d::Identity();
     if (has_cov) {
       const Eigen::LDLT<Eigen::Matrix3d> ldlt(cloud->covariances[i]);

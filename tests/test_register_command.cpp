@@ -58,6 +58,20 @@ TEST_F(RegisterCommand, BunnyPairPrintsTheJsonContract) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
+TEST_F(RegisterCommand, FastPresetMatchesAVoxelSample) {
+  const CommandResult r = Rovermap(
+      "register " + kBunny + "bun045.ply " + kBunny + "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" "
+      "--config " + std::string(ROVERMAP_SOURCE_DIR) + "/config/presets/fast.yaml");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["converged"].get<bool>());
+  // bun045 has 40 097 points; a 3·D voxel keeps about one in four.
+  EXPECT_LT(j["sample_points"].get<std::size_t>(), 40097u / 3);
+  EXPECT_LE(j["inliers"].get<std::size_t>(), j["sample_points"].get<std::size_t>());
+  EXPECT_NEAR(j["matrix"][0][0].get<double>(), 0.826350588, 2e-3);
+  EXPECT_NEAR(j["translation"][0].get<double>(), -0.0520211, 5e-4);
+}
+
 TEST_F(RegisterCommand, UnwritablePreviewIsNamed) {
   const std::string good = GoodXyz();
   const CommandResult r = Rovermap("register " + good + " " + good + " --preview " +
