@@ -105,7 +105,9 @@ int RunRegister(const RegisterArgs& args) {
                      {"branch", registration::ToString(it.branch)},
                      {"rms", it.rms_m},
                      {"step_translation", it.step_translation_m},
-                     {"step_rotation_deg", it.step_rotation_deg}});
+                     {"step_rotation_deg", it.step_rotation_deg},
+                     {"accelerated", it.accelerated},
+                     {"extrapolation_rejected", it.extrapolation_rejected}});
   }
   nlohmann::json out = {
       {"source", args.source},

@@ -7,6 +7,7 @@
 namespace rovermap::config::detail {
 namespace {
 
+using registration::Acceleration;
 using registration::Convergence;
 using registration::Criterion;
 using registration::Geometry;
@@ -24,6 +25,8 @@ const EnumNames<Residual> kResidualNames = {{"point_to_point", Residual::kPointT
                                             {"point_to_plane", Residual::kPointToPlane}};
 const EnumNames<Convergence> kConvergenceNames = {{"absolute", Convergence::kAbsolute},
                                                   {"relative", Convergence::kRelative}};
+const EnumNames<Acceleration> kAccelerationNames = {{"none", Acceleration::kNone},
+                                                    {"anderson", Acceleration::kAnderson}};
 const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
     {"sgbm_3way", stereo::Algorithm::kSgbm3Way},
     {"sgbm", stereo::Algorithm::kSgbm},
@@ -62,6 +65,9 @@ std::vector<KeyEntry> BuildRegistry() {
              "absolute test: translation step; 0 = D / 100");
   reg.Double("rotation_tolerance_deg", &R::rotation_tolerance_deg, "deg", AtLeast(0),
              "absolute test: rotation step");
+  reg.Enum("acceleration", &R::acceleration, kAccelerationNames,
+           "anderson: extrapolate the pose, energy safeguard");
+  reg.Int("anderson_depth", &R::anderson_depth, "count", AtLeast(1), "past steps Anderson combines");
   reg.Double("orientation_threshold_deg", &R::orientation_threshold_deg, "deg", ClosedOpen(0, 180),
              "Theta: max normal/tangent angle; 0 = off");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "registration/Anderson.hpp"
 #include "registration/CloudGeometry.hpp"
 #include "registration/MotionSolver.hpp"
 #include "registration/VoxelGrid.hpp"
@@ -164,6 +165,32 @@ bool PointToPlaneStep(const IndexedCloud& source, const IndexedCloud& target,
 Eigen::Vector3d RotationVector(const Eigen::Matrix3d& r) {
   const Eigen::AngleAxisd aa(r);
   return aa.angle() * aa.axis();
+}
+
+// The pose as [rotation vector (rad), translation (m)]: the space Anderson extrapolates in.
+AndersonAccelerator::Vector6 PoseParameters(const Eigen::Isometry3d& T) {
+  AndersonAccelerator::Vector6 x;
+  x << RotationVector(T.linear()), T.translation();
+  return x;
+}
+
+Eigen::Isometry3d PoseFromParameters(const AndersonAccelerator::Vector6& x) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const double angle = x.head<3>().norm();
+  if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
+  T.translation() = x.tail<3>();
+  return T;
+}
+
+// Mean truncated quadratic energy at bound tau: found pairs add min(d², τ²), queries without
+// a pair τ². Comparable between two poses when evaluated at the same τ (no larger than the
+// bounds the distances were searched with).
+double TruncatedEnergy(const std::vector<double>& distances, std::size_t queries, double tau) {
+  if (queries == 0) return 0.0;
+  const double tau_sq = tau * tau;
+  double e = static_cast<double>(queries - std::min(queries, distances.size())) * tau_sq;
+  for (const double d : distances) e += std::min(d * d, tau_sq);
+  return e / static_cast<double>(queries);
 }
 
 bool RelativeConverged(const Eigen::Isometry3d& T_old, const Eigen::Isometry3d& T_new,
@@ -359,24 +386,58 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   std::vector<WeightedPair> pairs;
   result.status = RegistrationStatus::kMaxIterations;
 
+  // Anderson acceleration state: the plain iterate behind an extrapolated T (the fallback),
+  // and the previous pose's distances for the energy safeguard.
+  AndersonAccelerator anderson(options.acceleration == Acceleration::kAnderson ? options.anderson_depth
+                                                                            : 0);
+  bool extrapolated = false;
+  Eigen::Isometry3d T_plain = T;
+  std::vector<double> previous_distances;
+  std::size_t previous_queries = 0, previous_step = 0;
+
   for (int it = 1; it <= options.max_iterations; ++it) {
     const bool coarse = options.coarse_to_fine && it <= options.coarse_iterations;
     const std::size_t step = coarse ? static_cast<std::size_t>(options.coarse_step) : 1;
-
-    // a. Closest points within Dmax, both ways for the symmetric criterion.
-    matches.clear();
-    MatchDirection(source, target, T, dmax, min_abs_cos, source_sample, step, false,
-                   need_orientations, &forward_hints, &matches);
-    std::size_t queries = (source_sample.size() + step - 1) / step;
-    if (symmetric) {
-      MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, target_sample, step, true,
-                     need_orientations, &backward_hints, &matches);
-      queries += (target_sample.size() + step - 1) / step;
+    if (step != previous_step) {
+      // A new query set is a new objective: no history, no unverified extrapolation.
+      anderson.Reset();
+      if (extrapolated) T = T_plain;
+      extrapolated = false;
     }
 
+    // a. Closest points within Dmax, both ways for the symmetric criterion.
+    auto match = [&] {
+      matches.clear();
+      MatchDirection(source, target, T, dmax, min_abs_cos, source_sample, step, false,
+                     need_orientations, &forward_hints, &matches);
+      std::size_t n = (source_sample.size() + step - 1) / step;
+      if (symmetric) {
+        MatchDirection(target, source, T.inverse(), dmax, min_abs_cos, target_sample, step, true,
+                       need_orientations, &backward_hints, &matches);
+        n += (target_sample.size() + step - 1) / step;
+      }
+      distances.clear();
+      for (const Match& m : matches) distances.push_back(m.distance);
+      return n;
+    };
+    const std::size_t queries = match();
+    // Safeguard: an extrapolated pose must not raise the energy over the previous pose's at
+    // the current bound; otherwise take the plain iterate and forget the history.
+    bool rejected = false;
+    if (extrapolated && TruncatedEnergy(distances, queries, dmax) >
+                            TruncatedEnergy(previous_distances, previous_queries, dmax)) {
+      T = T_plain;
+      anderson.Reset();
+      extrapolated = false;
+      rejected = true;
+      match();
+    }
+    const bool accelerated = extrapolated;
+    previous_distances = distances;
+    previous_queries = queries;
+    previous_step = step;
+
     // b, c. Statistics of the distances and the new Dmax.
-    distances.clear();
-    for (const Match& m : matches) distances.push_back(m.distance);
     const DmaxUpdate update = UpdateDmax(distances, d_ref, dmax, options.histogram_bins,
                                          options.histogram_valley_ratio);
     dmax = update.dmax_m;
@@ -405,7 +466,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
     IterationTrace trace;
     trace.iteration = it;
-    trace.queries = queries;
+    trace.queries = rejected ? 2 * queries : queries;  // a rejected extrapolation matched twice
     trace.pairs_found = distances.size();
     trace.pairs_kept = kept;
     trace.mean_m = update.mean_m;
@@ -413,6 +474,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     trace.dmax_m = dmax;
     trace.branch = update.branch;
     trace.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
+    trace.accelerated = accelerated;
+    trace.extrapolation_rejected = rejected;
 
     if (kept < static_cast<std::size_t>(std::max(3, options.min_pairs))) {
       result.trace.push_back(trace);
@@ -445,7 +508,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
       break;
     }
 
-    // f. Stopping test.
+    // f. Stopping test (on the plain step: it is the fixed-point residual).
+    const Eigen::Isometry3d T_prev = T;
     trace.step_translation_m = (T_new.translation() - T.translation()).norm();
     trace.step_rotation_deg =
         Eigen::AngleAxisd(T_new.linear() * T.linear().transpose()).angle() * kRadToDeg;
@@ -462,7 +526,17 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
       result.status = RegistrationStatus::kConverged;
       break;
     }
+    // Extrapolate from the plain step (checked at the next matching).
+    const AndersonAccelerator::Vector6 g = PoseParameters(T_new);
+    const AndersonAccelerator::Vector6 next = anderson.Next(PoseParameters(T_prev), g);
+    extrapolated = next != g;
+    if (extrapolated) {
+      T_plain = T_new;
+      T = PoseFromParameters(next);
+    }
   }
+  // The loop may end on an extrapolation nobody checked: keep the plain iterate.
+  if (extrapolated) T = T_plain;
 
   result.converged = result.status == RegistrationStatus::kConverged;
   result.T_target_source = T;

@@ -71,7 +71,7 @@ const char* ToString(RegistrationStatus status);
 /// One iteration of the loop (Zhang 1994, §4.3 step 3).
 struct IterationTrace {
   int iteration = 0;
-  std::size_t queries = 0;       ///< closest-point queries (source points used, both ways)
+  std::size_t queries = 0;       ///< closest-point queries (sampled points used, both ways)
   std::size_t pairs_found = 0;   ///< pairs within the previous Dmax (and orientation test)
   std::size_t pairs_kept = 0;    ///< pairs after the new Dmax or the Mahalanobis gate
   double mean_m = 0.0;           ///< μ of the found pairs' distances
@@ -81,6 +81,8 @@ struct IterationTrace {
   double rms_m = 0.0;            ///< RMS distance of the kept pairs before the motion update
   double step_translation_m = 0.0;
   double step_rotation_deg = 0.0;
+  bool accelerated = false;             ///< matched at an (accepted) Anderson extrapolation
+  bool extrapolation_rejected = false;  ///< the extrapolation raised the energy: plain step used
 };
 
 struct RegistrationResult {

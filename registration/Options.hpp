@@ -16,6 +16,9 @@ enum class Residual { kPointToPoint, kPointToPlane };
 /// the step is below fixed tolerances in metres and degrees (see ALGORITHM.md,
 /// "Known weakness").
 enum class Convergence { kRelative, kAbsolute };
+/// Acceleration of the iterates (ALGORITHM.md, "Known weakness"): Anderson extrapolation of
+/// the pose with an energy safeguard (AA-ICP, Pavlov et al. 2018), or none (the paper).
+enum class Acceleration { kNone, kAnderson };
 
 /// Options of the iterative point matcher. Defaults are for dense stereo / range data;
 /// every field is a config key under `registration.`.
@@ -44,6 +47,10 @@ struct RegistrationOptions {
   double translation_tolerance_m = 0.0;
   /// kAbsolute: rotation step below this [deg].
   double rotation_tolerance_deg = 0.001;
+
+  Acceleration acceleration = Acceleration::kAnderson;
+  /// Past steps Anderson combines (m) [count].
+  int anderson_depth = 5;
 
   /// Θ: reject pairs whose normals (surfaces) or tangents (curves) differ by more
   /// than this angle [deg]; 0 = off. Signs are ignored (|cos|).

@@ -114,8 +114,11 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(a.relative_tolerance, b.relative_tolerance);
   EXPECT_EQ(a.translation_tolerance_m, b.translation_tolerance_m);
   EXPECT_EQ(a.rotation_tolerance_deg, b.rotation_tolerance_deg);
+  EXPECT_EQ(a.acceleration, b.acceleration);
+  EXPECT_EQ(a.anderson_depth, b.anderson_depth);
   EXPECT_EQ(a.orientation_threshold_deg, b.orientation_threshold_deg);
   EXPECT_EQ(a.normal_neighbors, b.normal_neighbors);
+  EXPECT_EQ(a.sample_voxel_factor, b.sample_voxel_factor);
   EXPECT_EQ(a.coarse_to_fine, b.coarse_to_fine);
   EXPECT_EQ(a.coarse_iterations, b.coarse_iterations);
   EXPECT_EQ(a.coarse_step, b.coarse_step);
@@ -208,7 +211,7 @@ TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
       "true",           "false",   "7",     "3",         "0.5",
       "0.25",           "2",       "curve", "symmetric", "dual_quaternion",
       "point_to_plane", "point_to_point", "relative", "sgbm", "32", "straight", "cloud", "64",
-      "0.75"};  // octomap.prob_hit: in (0.5, 1)
+      "0.75", "none"};  // octomap.prob_hit: in (0.5, 1); acceleration
   for (const std::string& key : KnownKeys()) {
     // geometry=curve is only valid with point_to_point residuals: start from there.
     std::vector<std::string> base;

@@ -242,13 +242,14 @@ TEST(Icp, SymmetricCriterionIsMoreAccurate) {
   EXPECT_LT(error_s, error_ns);
 }
 
-// Uncertainty (§4.4): with range-dependent (stereo-like) noise, covariance weighting and
-// the Mahalanobis gate beat the unweighted point-to-point estimate (measured: rotation
-// error 5–18× smaller). With point-to-plane residuals the effect is within the noise of
-// this scene (see the closing note of issue 2), so it is not asserted here.
+// Uncertainty (§4.4): with range-dependent (stereo-like) noise, covariance weighting and the
+// Mahalanobis gate land closer to the truth than the unweighted point-to-point estimate.
+// Measured at the fixed points (run to 1e-6°): 0.050–0.060° weighted against 0.076–0.085°
+// unweighted. (Without acceleration the unweighted run had not reached its fixed point after
+// 100 iterations, which once made the gain look 5–18×.)
 TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
   double error_plain = 0.0, error_weighted = 0.0;
-  for (unsigned seed : {1u, 2u}) {
+  for (unsigned seed : {1u, 2u, 4u}) {
     SceneOptions so = Terrain(seed);
     so.range_noise = true;
     so.noise_m = 0.01;
@@ -262,12 +263,57 @@ TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
     const RegistrationResult plain = Register(p.source, p.target, init, o);
     o.use_uncertainty = true;
     const RegistrationResult weighted = Register(p.source, p.target, init, o);
-    error_plain += PoseError(plain.T_target_source, p.T_target_source).first;
-    error_weighted += PoseError(weighted.T_target_source, p.T_target_source).first;
+    const double e_plain = PoseError(plain.T_target_source, p.T_target_source).first;
+    const double e_weighted = PoseError(weighted.T_target_source, p.T_target_source).first;
+    EXPECT_LT(e_weighted, 0.85 * e_plain) << "seed " << seed;
+    error_plain += e_plain;
+    error_weighted += e_weighted;
     // The gate works on covariances, not on Dmax: it keeps a different pair set.
     EXPECT_NE(weighted.inliers, plain.inliers);
   }
-  EXPECT_LT(error_weighted, 0.33 * error_plain);
+  EXPECT_LT(error_weighted, 0.75 * error_plain);
+}
+
+// Anderson acceleration (ALGORITHM.md, "Known weakness"): point-to-point creeps along the
+// smooth terrain; extrapolating the pose reaches the same fixed point in far fewer iterations
+// (measured: 43–60 against 116–188), and the energy safeguard rejects the bad extrapolations.
+TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
+  for (unsigned seed : {1u, 2u, 4u}) {
+    SceneOptions so = Terrain(seed);
+    so.range_noise = true;
+    so.noise_m = 0.01;
+    const ScenePair p = MakeTerrainPair(so);
+    const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
+    RegistrationOptions o;
+    o.residual = Residual::kPointToPoint;
+    o.sample_voxel_factor = 0.0;
+    o.max_iterations = 1000;
+    // The fixed point: plain iteration with tolerances far below the noise.
+    o.acceleration = Acceleration::kNone;
+    o.rotation_tolerance_deg = 1e-6;
+    o.translation_tolerance_m = 1e-9;
+    const RegistrationResult fixed_point = Register(p.source, p.target, init, o);
+    ASSERT_TRUE(fixed_point.converged);
+    // Default tolerances, with and without acceleration.
+    o.rotation_tolerance_deg = RegistrationOptions{}.rotation_tolerance_deg;
+    o.translation_tolerance_m = 0.0;
+    const RegistrationResult plain = Register(p.source, p.target, init, o);
+    o.acceleration = Acceleration::kAnderson;
+    const RegistrationResult accelerated = Register(p.source, p.target, init, o);
+    EXPECT_TRUE(accelerated.converged) << "seed " << seed;
+    EXPECT_LT(accelerated.iterations, 0.75 * plain.iterations) << "seed " << seed;
+    const auto [rot, trans] = PoseError(accelerated.T_target_source, fixed_point.T_target_source);
+    EXPECT_LT(rot, 0.01) << "seed " << seed;
+    EXPECT_LT(trans, 0.002) << "seed " << seed;
+    int used = 0, rejected = 0;
+    for (const IterationTrace& t : accelerated.trace) {
+      used += t.accelerated;
+      rejected += t.extrapolation_rejected;
+      EXPECT_FALSE(t.accelerated && t.extrapolation_rejected);
+    }
+    EXPECT_GT(used, 5) << "seed " << seed;
+    EXPECT_GT(rejected, 0) << "seed " << seed << ": the safeguard never acted";
+  }
 }
 
 TEST(Icp, CovarianceIsSymmetricPositiveDefiniteAndFlagsAPlane) {
