@@ -25,7 +25,8 @@ const EnumNames<Residual> kResidualNames = {{"point_to_point", Residual::kPointT
                                             {"point_to_plane", Residual::kPointToPlane}};
 const EnumNames<Convergence> kConvergenceNames = {{"absolute", Convergence::kAbsolute},
                                                   {"relative", Convergence::kRelative}};
-const EnumNames<Acceleration> kAccelerationNames = {{"none", Acceleration::kNone},
+const EnumNames<Acceleration> kAccelerationNames = {{"auto", Acceleration::kAuto},
+                                                    {"none", Acceleration::kNone},
                                                     {"anderson", Acceleration::kAnderson}};
 const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
     {"sgbm_3way", stereo::Algorithm::kSgbm3Way},
@@ -66,7 +67,7 @@ std::vector<KeyEntry> BuildRegistry() {
   reg.Double("rotation_tolerance_deg", &R::rotation_tolerance_deg, "deg", AtLeast(0),
              "absolute test: rotation step");
   reg.Enum("acceleration", &R::acceleration, kAccelerationNames,
-           "anderson: extrapolate the pose, energy safeguard");
+           "anderson: extrapolate the pose; auto: for point_to_point only");
   reg.Int("anderson_depth", &R::anderson_depth, "count", AtLeast(1), "past steps Anderson combines");
   reg.Double("orientation_threshold_deg", &R::orientation_threshold_deg, "deg", ClosedOpen(0, 180),
              "Theta: max normal/tangent angle; 0 = off");

@@ -388,8 +388,10 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
   // Anderson acceleration state: the plain iterate behind an extrapolated T (the fallback),
   // and the previous pose's distances for the energy safeguard.
-  AndersonAccelerator anderson(options.acceleration == Acceleration::kAnderson ? options.anderson_depth
-                                                                            : 0);
+  const bool accelerate =
+      options.acceleration == Acceleration::kAnderson ||
+      (options.acceleration == Acceleration::kAuto && options.residual == Residual::kPointToPoint);
+  AndersonAccelerator anderson(accelerate ? options.anderson_depth : 0);
   bool extrapolated = false;
   Eigen::Isometry3d T_plain = T;
   std::vector<double> previous_distances;

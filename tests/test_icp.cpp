@@ -313,6 +313,12 @@ TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
     }
     EXPECT_GT(used, 5) << "seed " << seed;
     EXPECT_GT(rejected, 0) << "seed " << seed << ": the safeguard never acted";
+    // The default (auto) accelerates point-to-point, and leaves point-to-plane alone.
+    o.acceleration = Acceleration::kAuto;
+    EXPECT_EQ(Register(p.source, p.target, init, o).iterations, accelerated.iterations);
+    o.residual = Residual::kPointToPlane;
+    for (const IterationTrace& t : Register(p.source, p.target, init, o).trace)
+      EXPECT_FALSE(t.accelerated || t.extrapolation_rejected);
   }
 }
 
