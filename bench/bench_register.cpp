@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "config/Config.hpp"
+#include "bench/BenchUtil.hpp"
 #include "io/PointCloudIo.hpp"
 #include "registration/Icp.hpp"
 #include "registration/Options.hpp"
@@ -39,6 +40,9 @@
 #endif
 
 namespace {
+
+using rovermap::bench::LoadAverage;
+using rovermap::bench::Median;
 
 namespace reg = rovermap::registration;
 using Clock = std::chrono::steady_clock;
@@ -69,13 +73,9 @@ Args ParseArgs(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
+    auto value = [&] { return rovermap::bench::OptionValue(argc, argv, &i); };
     if (arg == "--runs") {
-      a.runs = std::stoi(value());
-      if (a.runs < 1) throw std::invalid_argument("--runs must be at least 1");
+      a.runs = rovermap::bench::ParseRuns(value());
     } else if (arg == "--pairs") {
       a.pairs = value();
       if (a.pairs != "bunny" && a.pairs != "terrain" && a.pairs != "all")
@@ -200,19 +200,6 @@ RunResult RunRovermap(const BenchPair& pair, const reg::RegistrationOptions& opt
   return out;
 }
 
-// The first three fields of /proc/loadavg: the machine is shared, so say how busy it was.
-std::string LoadAverage() {
-  std::ifstream in("/proc/loadavg");
-  std::string a, b, c;
-  if (!(in >> a >> b >> c)) return "n/a";
-  return a + " " + b + " " + c;
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 struct Row {
   std::string pair, method;
