@@ -60,6 +60,36 @@ TEST(KdTree, RandomMatchesBruteForce) {
   CheckAgainstBruteForce(RandomCloud(rng, 2000, 1.0), rng, 1.5);
 }
 
+// Above 16 384 points the tree is built with parallel tasks: the same answers.
+TEST(KdTree, LargeParallelBuiltTreeMatchesBruteForce) {
+  std::mt19937 rng(7);
+  Points pts = RandomCloud(rng, 50000, 1.0);
+  // A dense clump as well, so subtrees differ in size and depth is uneven in space.
+  std::normal_distribution<double> tight(0.0, 1e-3);
+  for (int i = 0; i < 5000; ++i) pts.emplace_back(0.3 + tight(rng), -0.2 + tight(rng), tight(rng));
+  const KdTree tree(pts);
+  ASSERT_EQ(tree.size(), pts.size());
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  for (int q = 0; q < 200; ++q) {
+    const Eigen::Vector3d random(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d query = q % 4 == 0 ? Eigen::Vector3d(0.3, -0.2, 0.0) + 0.002 * random : random;
+    for (double bound : {0.01, 0.1, 10.0}) {
+      const Neighbor expected = BruteClosest(pts, query, bound);
+      const Neighbor got = tree.FindClosest(query, bound);
+      ASSERT_EQ(got.found, expected.found);
+      if (expected.found) {
+        EXPECT_DOUBLE_EQ(got.squared_distance, expected.squared_distance);
+      }
+    }
+    std::vector<double> all;
+    for (const auto& p : pts) all.push_back((p - query).squaredNorm());
+    std::partial_sort(all.begin(), all.begin() + 10, all.end());
+    const auto knn = tree.FindKNearest(query, 10);
+    ASSERT_EQ(knn.size(), 10u);
+    for (std::size_t k = 0; k < 10; ++k) EXPECT_DOUBLE_EQ(knn[k].squared_distance, all[k]);
+  }
+}
+
 TEST(KdTree, DuplicatesMatchBruteForce) {
   std::mt19937 rng(2);
   Points base = RandomCloud(rng, 50, 1.0);
