@@ -38,10 +38,6 @@ Eigen::Vector3i VoxelGrid::Cell(const Eigen::Vector3d& p) const {
                          ClampedFloor(p.z() / edge_));
 }
 
-Eigen::Vector3d VoxelGrid::Centre(const Eigen::Vector3i& cell) const {
-  return (cell.cast<double>().array() + 0.5).matrix() * edge_;
-}
-
 std::size_t VoxelGrid::Insert(const Eigen::Vector3d& p) {
   if (2 * (cells_ + 1) > table_.size()) Grow();
   const Eigen::Vector3i cell = Cell(p);

@@ -8,8 +8,9 @@
 namespace rovermap::registration {
 
 /// Dense ids for the occupied cells of a cubic voxel grid: an open-addressing hash of the
-/// integer cell coordinates (a few times faster than std::unordered_map at one point per
-/// insert, which is the hot path of sampling a frame).
+/// integer cell coordinates. Measured on a 300k-point frame in row order: 1.4–1.8× faster
+/// than the std::unordered_map it replaced in stereo's downsampling (25 against 45 ms at
+/// 1 cm voxels).
 class VoxelGrid {
  public:
   /// `edge_m` > 0 [m]; `expected_cells` sizes the table (it grows when needed).
@@ -19,8 +20,6 @@ class VoxelGrid {
   std::size_t Insert(const Eigen::Vector3d& p);
   /// Integer coordinates of the cell holding `p` (clamped to the int32 range).
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const;
-  /// Centre of a cell [m].
-  Eigen::Vector3d Centre(const Eigen::Vector3i& cell) const;
 
   std::size_t size() const { return cells_; }
   double edge() const { return edge_; }
