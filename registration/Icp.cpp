@@ -392,7 +392,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
       options.acceleration == Acceleration::kAnderson ||
       (options.acceleration == Acceleration::kAuto && options.residual == Residual::kPointToPoint);
   AndersonAccelerator anderson(accelerate ? options.anderson_depth : 0);
-  bool extrapolated = false;
+  bool extrapolated = false;  // T is an extrapolation the safeguard has not checked yet
   Eigen::Isometry3d T_plain = T;
   std::vector<double> previous_distances;
   std::size_t previous_queries = 0, previous_step = 0;
@@ -430,11 +430,11 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
                             TruncatedEnergy(previous_distances, previous_queries, dmax)) {
       T = T_plain;
       anderson.Reset();
-      extrapolated = false;
       rejected = true;
       match();
     }
-    const bool accelerated = extrapolated;
+    const bool accelerated = extrapolated && !rejected;
+    extrapolated = false;  // T is checked now (or plain)
     previous_distances = distances;
     previous_queries = queries;
     previous_step = step;
