@@ -124,13 +124,14 @@ double UncertaintyWeight(const IndexedCloud& source, const IndexedCloud& target,
          PairCovariance(source.cloud(), target.cloud(), m, rotation, sampling_variance).trace();
 }
 
-Eigen::Isometry3d ExpLeft(const Eigen::Matrix<double, 6, 1>& delta, const Eigen::Isometry3d& T) {
-  const Eigen::Vector3d omega = delta.head<3>();
-  const double angle = omega.norm();
-  Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
-  if (angle > 0.0) update.linear() = Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix();
-  update.translation() = delta.tail<3>();
-  return update * T;
+// The pose of [rotation vector (rad), translation (m)]: a left update in the point-to-plane
+// step, and the space Anderson extrapolates in.
+Eigen::Isometry3d PoseFromParameters(const Eigen::Matrix<double, 6, 1>& x) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const double angle = x.head<3>().norm();
+  if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
+  T.translation() = x.tail<3>();
+  return T;
 }
 
 // One Gauss-Newton step of the point-to-plane residual nᵀ(T x − y) for a left
@@ -158,7 +159,7 @@ bool PointToPlaneStep(const IndexedCloud& source, const IndexedCloud& target,
   h.diagonal().array() += 1e-9 * std::max(1e-12, h.trace());
   const Eigen::Matrix<double, 6, 1> delta = h.ldlt().solve(-g);
   if (!delta.allFinite()) return false;
-  *T = ExpLeft(delta, *T);
+  *T = PoseFromParameters(delta) * *T;
   return true;
 }
 
@@ -167,19 +168,11 @@ Eigen::Vector3d RotationVector(const Eigen::Matrix3d& r) {
   return aa.angle() * aa.axis();
 }
 
-// The pose as [rotation vector (rad), translation (m)]: the space Anderson extrapolates in.
+// The inverse of PoseFromParameters (rotation angle below π).
 AndersonAccelerator::Vector6 PoseParameters(const Eigen::Isometry3d& T) {
   AndersonAccelerator::Vector6 x;
   x << RotationVector(T.linear()), T.translation();
   return x;
-}
-
-Eigen::Isometry3d PoseFromParameters(const AndersonAccelerator::Vector6& x) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const double angle = x.head<3>().norm();
-  if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, x.head<3>() / angle).toRotationMatrix();
-  T.translation() = x.tail<3>();
-  return T;
 }
 
 // Mean truncated quadratic energy at bound tau: found pairs add min(d², τ²), queries without
@@ -435,7 +428,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     }
     const bool accelerated = extrapolated && !rejected;
     extrapolated = false;  // T is checked now (or plain)
-    previous_distances = distances;
+    if (accelerate) previous_distances = distances;  // only the safeguard reads them
     previous_queries = queries;
     previous_step = step;
 

@@ -66,6 +66,23 @@ std::size_t TotalQueries(const RegistrationResult& r) {
   return q;
 }
 
+// Stereo-like terrain: noise along the view ray growing with range (1 cm at 3 m).
+ScenePair RangeNoiseTerrain(unsigned seed) {
+  SceneOptions so = Terrain(seed);
+  so.range_noise = true;
+  so.noise_m = 0.01;
+  return MakeTerrainPair(so);
+}
+
+// The paper's residual on the full cloud: the voxel sample thins the dense, accurate near
+// field, which is what uncertainty weighting exploits (its effect is measured on every point).
+RegistrationOptions PointToPointOnEveryPoint() {
+  RegistrationOptions o;
+  o.residual = Residual::kPointToPoint;
+  o.sample_voxel_factor = 0.0;
+  return o;
+}
+
 }  // namespace
 
 TEST(Icp, TerrainRecoveredWithDefaults) {
@@ -250,16 +267,9 @@ TEST(Icp, SymmetricCriterionIsMoreAccurate) {
 TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
   double error_plain = 0.0, error_weighted = 0.0;
   for (unsigned seed : {1u, 2u, 4u}) {
-    SceneOptions so = Terrain(seed);
-    so.range_noise = true;
-    so.noise_m = 0.01;
-    const ScenePair p = MakeTerrainPair(so);
+    const ScenePair p = RangeNoiseTerrain(seed);
     const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
-    RegistrationOptions o;
-    o.residual = Residual::kPointToPoint;
-    // Every point: the voxel sample thins the dense, accurate near field, which is what the
-    // weighting exploits (the effect is measured on the full cloud).
-    o.sample_voxel_factor = 0.0;
+    RegistrationOptions o = PointToPointOnEveryPoint();
     const RegistrationResult plain = Register(p.source, p.target, init, o);
     o.use_uncertainty = true;
     const RegistrationResult weighted = Register(p.source, p.target, init, o);
@@ -279,14 +289,9 @@ TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
 // (measured: 43–60 against 116–188), and the energy safeguard rejects the bad extrapolations.
 TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
   for (unsigned seed : {1u, 2u, 4u}) {
-    SceneOptions so = Terrain(seed);
-    so.range_noise = true;
-    so.noise_m = 0.01;
-    const ScenePair p = MakeTerrainPair(so);
+    const ScenePair p = RangeNoiseTerrain(seed);
     const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
-    RegistrationOptions o;
-    o.residual = Residual::kPointToPoint;
-    o.sample_voxel_factor = 0.0;
+    RegistrationOptions o = PointToPointOnEveryPoint();
     o.max_iterations = 1000;
     // The fixed point: plain iteration with tolerances far below the noise.
     o.acceleration = Acceleration::kNone;
