@@ -51,6 +51,16 @@ CLI::App* AddSimulateCommand(CLI::App* app, SimulateArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunSimulate(const SimulateArgs& args);
 
+struct ReplayArgs {
+  ConfigArgs config;
+  std::string sequence;  ///< sequence directory (DESIGN.md §4)
+  std::string out;       ///< output directory
+  bool force = false;    ///< write into a non-empty directory
+};
+CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunReplay(const ReplayArgs& args);
+
 /// A command-line value that parses but makes no sense (exit 2).
 class UsageError : public std::runtime_error {
  public:

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   CLI::App* simulate_cmd = AddSimulateCommand(&app, &simulate_args);
   EvalArgs eval_args;
   CLI::App* eval_cmd = AddEvalCommand(&app, &eval_args);
+  ReplayArgs replay_args;
+  CLI::App* replay_cmd = AddReplayCommand(&app, &replay_args);
 
   try {
     app.parse(argc, argv);
@@ -42,6 +44,7 @@ int main(int argc, char** argv) {
     if (register_cmd->parsed()) return RunRegister(register_args);
     if (simulate_cmd->parsed()) return RunSimulate(simulate_args);
     if (eval_cmd->parsed()) return RunEval(eval_args);
+    if (replay_cmd->parsed()) return RunReplay(replay_args);
   } catch (const rovermap::config::ConfigError& e) {
     std::cerr << "rovermap: config error: " << e.what() << "\n";
     return kExitUsage;

@@ -9,6 +9,7 @@
 #include "dem/ElevationMap.hpp"
 #include "dem/OctoMapOptions.hpp"
 #include "eval/EvalOptions.hpp"
+#include "mapper/MapperOptions.hpp"
 #include "registration/Options.hpp"
 #include "sim/SimOptions.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -24,6 +25,7 @@ struct Config {
   dem::ElevationMapOptions dem;
   dem::OctoMapOptions octomap;
   eval::EvalOptions eval;
+  mapper::MapperOptions mapper;
 };
 
 /// Builds a Config: the struct defaults, then `file` (nested YAML, one mapping per section),

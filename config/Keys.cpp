@@ -36,6 +36,8 @@ const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
 const EnumNames<sim::PathShape> kPathShapeNames = {{"straight", sim::PathShape::kStraight},
                                                  {"curves", sim::PathShape::kCurves},
                                                  {"loop", sim::PathShape::kLoop}};
+const EnumNames<mapper::Reference> kReferenceNames = {{"previous", mapper::Reference::kPrevious},
+                                                     {"local_map", mapper::Reference::kLocalMap}};
 const EnumNames<sim::SensorKind> kSensorKindNames = {{"stereo", sim::SensorKind::kStereo},
                                                    {"cloud", sim::SensorKind::kCloud}};
 
@@ -210,6 +212,37 @@ std::vector<KeyEntry> BuildRegistry() {
             "RPE: ground-truth travel per pair");
   ev.DoubleList("segment_lengths_m", &E::segment_lengths_m, "m", GreaterThan(0),
                 "KITTI-style segments (devkit: 100..800 for cars)");
+
+  using P = mapper::MapperOptions;
+  SectionKeys<P> map(keys, "mapper", &Config::mapper);
+  map.Enum("reference", &P::reference, kReferenceNames,
+           "register onto the previous good frame or a local map of the last frames");
+  map.Int("local_map_frames", &P::local_map_frames, "count", AtLeast(1),
+          "local_map: registered frames kept");
+  map.Double("local_map_voxel_m", &P::local_map_voxel_m, "m", AtLeast(0),
+             "local_map: voxel thinning; 0 = the registration's D");
+  map.Int("min_points", &P::min_points, "count", AtLeast(3),
+          "fewer usable points = bad frame (not registered, not fused)");
+  map.Double("outlier_radius_factor", &P::outlier_radius_factor, "x spacing", AtLeast(0),
+             "isolated point: few neighbours within factor * range * angular spacing; 0 = off");
+  map.Int("outlier_min_neighbors", &P::outlier_min_neighbors, "count", Bounds{0, false, 16, false},
+          "neighbours an unisolated point has within that radius");
+  map.Double("min_inlier_ratio", &P::min_inlier_ratio, "ratio", Bounds{0, false, 1, false},
+             "reject a registration with fewer inliers / sampled points");
+  map.Double("max_rms_m", &P::max_rms_m, "m", GreaterThan(0),
+             "reject a registration with a larger RMS residual");
+  map.Double("correction_gate_sigma", &P::correction_gate_sigma, "sigma", GreaterThan(0),
+             "reject a correction beyond this many odometry sigmas");
+  map.Double("odometry_sigma_translation_ratio", &P::odometry_sigma_translation_ratio, "ratio",
+             AtLeast(0), "odometry translation sigma per metre of step");
+  map.Double("odometry_sigma_translation_m", &P::odometry_sigma_translation_m, "m", AtLeast(0),
+             "odometry translation sigma per step (floor)");
+  map.Double("odometry_sigma_rotation_deg_per_m", &P::odometry_sigma_rotation_deg_per_m, "deg/m",
+             AtLeast(0), "odometry rotation sigma per metre of step");
+  map.Double("odometry_sigma_rotation_deg", &P::odometry_sigma_rotation_deg, "deg", AtLeast(0),
+             "odometry rotation sigma per step (floor)");
+  map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
+             "directions with less information (relative to the best) keep dead reckoning");
 
   return keys;
 }

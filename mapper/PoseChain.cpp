@@ -51,6 +51,18 @@ bool IsFiniteRigid(const Eigen::Isometry3d& T) {
   return orthogonality <= 1e-6 && R.determinant() > 0.0;
 }
 
+Matrix6d Adjoint(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d t = T.translation();
+  Eigen::Matrix3d t_hat;
+  t_hat << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Matrix6d ad = Matrix6d::Zero();
+  ad.topLeftCorner<3, 3>() = R;
+  ad.bottomLeftCorner<3, 3>() = t_hat * R;
+  ad.bottomRightCorner<3, 3>() = R;
+  return ad;
+}
+
 PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
   if (!IsFiniteRigid(T_world_body0_odom)) {
     throw std::invalid_argument("PoseChain: frame 0 odometry pose is not a finite rigid transform");
@@ -66,7 +78,8 @@ Eigen::Isometry3d PoseChain::PredictIncrement(const Eigen::Isometry3d& T_world_b
 }
 
 ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
-                         const std::optional<Eigen::Isometry3d>& T_prev_curr_registered) {
+                         const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
+                         const Matrix6d& increment_covariance) {
   if (!IsFiniteRigid(T_world_body_odom)) {
     throw std::invalid_argument("PoseChain: frame " + std::to_string(steps_.size()) +
                                 " odometry pose is not a finite rigid transform");
@@ -81,6 +94,9 @@ ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
   step.T_world_body = prev.T_world_body * step.used_increment;
   step.increment_correction = step.odom_increment.inverse() * step.used_increment;
   step.cumulative_correction = T_world_body_odom.inverse() * step.T_world_body;
+  // T̂(k−1)·Exp(ξ)·Exp(δ)·ΔT̂ ≈ T̂(k−1)·ΔT̂·Exp(Ad(ΔT̂⁻¹)(ξ + δ)) to first order.
+  const Matrix6d A = Adjoint(step.used_increment.inverse());
+  step.covariance = A * (prev.covariance + increment_covariance) * A.transpose();
 
   path_length_m_ += step.used_increment.translation().norm();
   if (step.fallback) ++fallbacks_;

@@ -39,6 +39,13 @@ TransformComponents CorrectionComponents(const Eigen::Isometry3d& T);
 /// True if `T` is finite and its linear part a proper rotation (‖RᵀR − I‖∞ <= 1e-6, det R > 0).
 bool IsFiniteRigid(const Eigen::Isometry3d& T);
 
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Adjoint of `T` for perturbations ordered [rx ry rz tx ty tz] with the convention of
+/// RegistrationResult (left: T' = (Exp(δr), δt) ∘ T): a right perturbation ξ of T equals the
+/// left perturbation Ad(T)·ξ. Ad = [[R, 0], [[t]×R, R]].
+Matrix6d Adjoint(const Eigen::Isometry3d& T);
+
 /// One frame of the chain. The increments are T_{body k−1}_{body k}: they map points of
 /// frame k into frame k−1 (registration of frame k onto frame k−1).
 struct ChainStep {
@@ -61,6 +68,10 @@ struct ChainStep {
   /// Dead reckoning was used for this step (no registered increment, or it was not a finite
   /// rigid transform). Frame 0 is never a fallback.
   bool fallback = false;
+  /// Covariance of T_world_body for a right perturbation in the body frame
+  /// (T = T̂ ∘ (Exp(ξr), ξt)), [rx ry rz tx ty tz] (rad, m): zero at frame 0, then
+  /// Σ_k = A (Σ_{k−1} + Σ_increment) Aᵀ with A = Adjoint(used_increment⁻¹).
+  Matrix6d covariance = Matrix6d::Zero();
 };
 
 /// Chains increments from the first dead-reckoning pose. The chain starts where dead
@@ -77,12 +88,15 @@ class PoseChain {
 
   /// Appends the next frame: T_world_body(k) = T_world_body(k−1) · used increment, where the
   /// used increment is `T_prev_curr_registered`, or the dead-reckoning increment (flagged
-  /// `fallback`) when it is nullopt or not IsFiniteRigid.
+  /// `fallback`) when it is nullopt or not IsFiniteRigid. `increment_covariance` is the used
+  /// increment's, for a left perturbation in the frame k−1 (RegistrationResult's convention);
+  /// it is propagated into the step's `covariance`.
   /// @return the new step (also kept in steps()).
   /// @throw std::invalid_argument if `T_world_body_odom` is not IsFiniteRigid; the chain is
   ///        then unchanged.
   ChainStep Add(const Eigen::Isometry3d& T_world_body_odom,
-                const std::optional<Eigen::Isometry3d>& T_prev_curr_registered);
+                const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
+                const Matrix6d& increment_covariance = Matrix6d::Zero());
 
   /// Every step so far, frame 0 first; never empty.
   const std::vector<ChainStep>& steps() const { return steps_; }

@@ -252,6 +252,7 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
   double extent = 0.0;
   for (const Match& m : matches)
     extent = std::max(extent, (T * source.cloud().points[m.source_index] - T.translation()).norm());
+  result->extent_m = extent;
   Mat6 s = Mat6::Identity();
   s.topLeftCorner<3, 3>() *= 1.0 / std::max(extent, 1e-9);
   const Eigen::SelfAdjointEigenSolver<Mat6> eig(s * info * s);

@@ -104,6 +104,10 @@ struct RegistrationResult {
   /// Smallest / largest eigenvalue of the information scaled to unit metres and radians:
   /// near 0 means a direction the data do not constrain (a plane, a corridor).
   double conditioning = 0.0;
+  /// Largest distance of a matched source point from the source origin, in the target frame
+  /// [m]: the scale of rotations in `conditioning` (a rotation δr moves points by up to
+  /// δr · extent_m).
+  double extent_m = 0.0;
   std::vector<IterationTrace> trace;
   std::string message;  ///< why it failed, empty on success
 };

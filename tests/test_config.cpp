@@ -211,7 +211,7 @@ TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
       "true",           "false",   "7",     "3",         "0.5",
       "0.25",           "2",       "curve", "symmetric", "dual_quaternion",
       "point_to_plane", "point_to_point", "relative", "sgbm", "32", "straight", "cloud", "64",
-      "0.75", "none"};  // octomap.prob_hit: in (0.5, 1); acceleration
+      "0.75", "none", "local_map"};  // octomap.prob_hit: in (0.5, 1); acceleration; reference
   for (const std::string& key : KnownKeys()) {
     // geometry=curve is only valid with point_to_point residuals: start from there.
     std::vector<std::string> base;

@@ -1,0 +1,54 @@
+#pragma once
+// Step 5 of the pipeline: per-direction fallback. On flat or featureless ground the
+// registration constrains only some directions (on a plane: z, roll and pitch); in the others
+// its answer is noise, so those keep the dead-reckoning prediction.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+
+#include "mapper/PoseChain.hpp"  // Matrix6d
+
+namespace rovermap::mapper {
+
+/// Directions of an increment, in the registration's target frame (x forward, y left, z up).
+enum Direction : unsigned {
+  kRoll = 1u << 0,
+  kPitch = 1u << 1,
+  kYaw = 1u << 2,
+  kX = 1u << 3,
+  kY = 1u << 4,
+  kZ = 1u << 5,
+};
+
+/// "x y yaw" for a mask of Direction bits, in the order roll pitch yaw x y z; "" for none.
+std::string DirectionNames(unsigned mask);
+
+/// The increment kept after the per-direction test.
+struct BlendedIncrement {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  ///< blended T_target_source
+  /// Directions taken from the prediction (Direction bits): one per unconstrained eigenvector,
+  /// named by its largest component.
+  unsigned odometry_directions = 0;
+  int constrained = 0;  ///< eigen-directions taken from the registration (0..6)
+  /// Smallest eigenvalue / largest of the scaled information (the registration's
+  /// `conditioning`).
+  double min_ratio = 0.0;
+  /// Covariance of T for a left perturbation [rx ry rz tx ty tz] (rad, m), target frame: the
+  /// registration's in the constrained directions, `odometry_covariance` in the others.
+  Matrix6d covariance = Matrix6d::Zero();
+};
+
+/// Blends `T_registered` and `T_predicted` (both T_target_source) per eigen-direction of the
+/// registration's `information` (left perturbation p' = Exp(δr)·p + δt in the target frame, as
+/// RegistrationResult). Rotations are scaled by `extent_m` (the cloud's radius) so that their
+/// eigenvalues compare with the translations' in metres, as `conditioning` does. Directions
+/// whose eigenvalue is below `min_information` × the largest keep the prediction;
+/// min_information <= 0 keeps the registration whole. A zero information keeps the prediction
+/// whole. Never throws.
+BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
+                                const Eigen::Isometry3d& T_registered,
+                                const Matrix6d& information, double extent_m,
+                                double min_information, const Matrix6d& odometry_covariance);
+
+}  // namespace rovermap::mapper

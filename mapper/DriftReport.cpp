@@ -1,0 +1,235 @@
+#include "mapper/DriftReport.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "eval/PlotPrimitives.hpp"
+#include "mapper/Degeneracy.hpp"
+
+namespace rovermap::mapper {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+nlohmann::json Number(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = values.begin() + static_cast<long>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+std::string Quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) out += (c == '"') ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+void AppendComponents(std::ostringstream& s, const Eigen::Isometry3d& T) {
+  const TransformComponents c = CorrectionComponents(T);
+  s << ',' << c.dx_m << ',' << c.dy_m << ',' << c.dz_m << ',' << c.droll_deg << ','
+    << c.dpitch_deg << ',' << c.dyaw_deg;
+}
+
+nlohmann::json CorrectionJson(const Eigen::Isometry3d& T) {
+  const TransformComponents c = CorrectionComponents(T);
+  return {{"translation_m", T.translation().norm()},
+          {"rotation_deg", Eigen::AngleAxisd(T.linear()).angle() * kRadToDeg},
+          {"dx_m", c.dx_m},
+          {"dy_m", c.dy_m},
+          {"dz_m", c.dz_m},
+          {"droll_deg", c.droll_deg},
+          {"dpitch_deg", c.dpitch_deg},
+          {"dyaw_deg", c.dyaw_deg}};
+}
+
+// Total and median over the frames of one stage.
+nlohmann::json StageJson(const std::vector<FrameResult>& results,
+                         const std::function<double(const StageTimes&)>& stage) {
+  std::vector<double> values;
+  double total = 0.0;
+  for (const FrameResult& r : results) {
+    values.push_back(stage(r.time));
+    total += values.back();
+  }
+  return {{"total_ms", total}, {"median_ms", Number(Median(values))}};
+}
+
+}  // namespace
+
+std::string DriftCsv(const std::vector<FrameResult>& results) {
+  std::ostringstream s;
+  s << "index,timestamp,dx_m,dy_m,dz_m,droll_deg,dpitch_deg,dyaw_deg,"
+       "cum_dx_m,cum_dy_m,cum_dz_m,cum_droll_deg,cum_dpitch_deg,cum_dyaw_deg,"
+       "status,fallback_reason,odometry_directions,iterations,inliers,inlier_ratio,rms_m,time_ms,"
+       "matcher_status,conditioning,points,outliers_removed,detail\n";
+  s << std::setprecision(9);
+  for (const FrameResult& r : results) {
+    s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp
+      << std::defaultfloat << std::setprecision(9);
+    AppendComponents(s, r.step.increment_correction);
+    AppendComponents(s, r.step.cumulative_correction);
+    s << ',' << ToString(r.status) << ',' << ToString(r.fallback_reason) << ','
+      << DirectionNames(r.odometry_directions) << ',' << r.iterations << ',' << r.inliers << ','
+      << r.inlier_ratio << ',' << r.rms_m << ',' << r.time.total_ms << ',' << r.matcher_status
+      << ',' << r.conditioning << ',' << r.points << ',' << r.outliers_removed << ','
+      << Quoted(r.detail) << '\n';
+  }
+  return s.str();
+}
+
+std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& results,
+                                          const eval::EvalOptions& options) {
+  std::vector<Eigen::Isometry3d> registered, odometry, truth;
+  for (const FrameResult& r : results) {
+    if (!r.T_world_body_truth) continue;
+    registered.push_back(r.step.T_world_body);
+    odometry.push_back(r.step.T_world_body_odom);
+    truth.push_back(*r.T_world_body_truth);
+  }
+  if (truth.size() < 2) return std::nullopt;
+  return DriftMetrics{eval::EvaluateAssociated(registered, truth, options),
+                      eval::EvaluateAssociated(odometry, truth, options)};
+}
+
+nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
+                       const std::optional<DriftMetrics>& drift) {
+  const std::vector<FrameResult>& results = mapper.results();
+  std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0;
+  for (const FrameResult& r : results) {
+    if (r.status == FrameStatus::kRegistered || r.status == FrameStatus::kPartial) ++registered;
+    if (r.status == FrameStatus::kPartial) ++partial;
+    if (r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame) ++fallbacks;
+    if (r.status == FrameStatus::kBadFrame) ++bad;
+    outliers += r.outliers_removed;
+  }
+  const PoseChain* chain = mapper.chain();
+  nlohmann::json timing = {
+      {"load", StageJson(results, [](const StageTimes& t) { return t.load_ms; })},
+      {"stereo", StageJson(results, [](const StageTimes& t) { return t.stereo_ms; })},
+      {"prepare", StageJson(results, [](const StageTimes& t) { return t.prepare_ms; })},
+      {"register", StageJson(results, [](const StageTimes& t) { return t.register_ms; })},
+      {"fuse_dem", StageJson(results, [](const StageTimes& t) { return t.fuse_dem_ms; })},
+      {"fuse_octomap", StageJson(results, [](const StageTimes& t) { return t.fuse_octomap_ms; })},
+      {"frame", StageJson(results, [](const StageTimes& t) { return t.total_ms + t.load_ms; })},
+      {"write", {{"total_ms", run.write_ms}}},
+      {"wall_ms", run.wall_ms}};
+  const dem::ElevationMap& map = mapper.elevation_map();
+  nlohmann::json summary = {
+      {"sequence", run.sequence},
+      {"frames", results.size()},
+      {"registered", registered},
+      {"partial", partial},
+      {"fallbacks", fallbacks},
+      {"bad_frames", bad},
+      {"distance_m", chain ? chain->path_length_m() : 0.0},
+      {"final_correction", CorrectionJson(chain ? chain->back().cumulative_correction
+                                                : Eigen::Isometry3d::Identity())},
+      {"timing", timing},
+      {"frames_per_second",
+       run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
+      {"peak_rss_mb", run.peak_rss_mb},
+      {"dem",
+       {{"cells", map.CellCount()},
+        {"tiles", map.TileCount()},
+        {"cell_size_m", map.options().cell_size_m},
+        {"outliers_removed", outliers}}},
+  };
+  if (const auto* tree = mapper.octomap().tree()) {
+    summary["octomap"] = {{"leaves", tree->getNumLeafNodes()},
+                          {"resolution_m", tree->getResolution()}};
+  }
+  if (drift) {
+    summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},
+                          {"odometry", eval::ToJson(drift->odometry)}};
+  }
+  return summary;
+}
+
+void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
+                    const std::optional<DriftMetrics>& drift) {
+  using namespace eval::plot;
+  const cv::Scalar kRed(40, 40, 210);
+  std::vector<double> index, dt, dr, fallback_index;
+  for (const FrameResult& r : results) {
+    index.push_back(static_cast<double>(r.index));
+    dt.push_back(r.step.increment_correction.translation().norm());
+    dr.push_back(Eigen::AngleAxisd(r.step.increment_correction.linear()).angle() * kRadToDeg);
+    if (r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame)
+      fallback_index.push_back(static_cast<double>(r.index));
+  }
+  const double last = index.empty() ? 1.0 : std::max(1.0, index.back());
+  auto peak = [](const std::vector<double>& v) {
+    double m = 1e-6;
+    for (double x : v) m = std::max(m, x);
+    return m * 1.1;
+  };
+  cv::Mat img(1180, 920, CV_8UC3, kWhite);
+  cv::putText(img, "drift correction per frame and drift against distance travelled", {80, 25},
+              kFont, 0.55, kBlack, 1, cv::LINE_AA);
+  // Panels 1-2: what registration changed in each increment; red ticks = dead reckoning used.
+  const Axes translation{cv::Rect(80, 60, 800, 250), 0.0, last, 0.0, peak(dt)};
+  const Axes rotation{cv::Rect(80, 400, 800, 250), 0.0, last, 0.0, peak(dr)};
+  for (const auto& [axes, values, label] :
+       {std::tuple{translation, dt, "increment correction, translation [m]"},
+        std::tuple{rotation, dr, "increment correction, rotation [deg]"}}) {
+    DrawAxes(img, axes, "frame", label);
+    for (double f : fallback_index) {
+      const cv::Point p = axes.Map(f, axes.y0);
+      cv::line(img, p, p - cv::Point(0, 12), kRed, 2);
+    }
+    DrawLine(img, axes, index, values, Colour(1), 2);
+  }
+  DrawLegend(img, {{"registered increment vs dead reckoning", Colour(1)},
+                   {"dead reckoning used (fallback / bad frame)", kRed}},
+             {translation.area.x + 15, translation.area.y + 20});
+
+  // Panel 3: drift against distance.
+  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  const cv::Rect area(80, 740, 800, 360);
+  if (drift && drift->registered.status == eval::MetricStatus::kOk &&
+      drift->odometry.status == eval::MetricStatus::kOk) {
+    const auto& reg = drift->registered;
+    const auto& odo = drift->odometry;
+    const double y1 = std::max(peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m));
+    const Axes axes{area, 0.0, std::max(reg.distance_m.back(), 1e-6), 0.0, y1};
+    DrawAxes(img, axes, "distance travelled (ground truth) [m]",
+             "position error against the ground truth, aligned at the first pose [m]");
+    DrawLine(img, axes, odo.distance_m, odo.ate_origin_error_m, Colour(0), 2);
+    DrawLine(img, axes, reg.distance_m, reg.ate_origin_error_m, Colour(1), 2);
+    legend = {{"dead reckoning (ATE origin " + Format(odo.ate_origin_m.rmse) + " m)", Colour(0)},
+              {"registered (ATE origin " + Format(reg.ate_origin_m.rmse) + " m)", Colour(1)}};
+  } else {
+    std::vector<double> distance, correction;
+    double travelled = 0.0;
+    for (const FrameResult& r : results) {
+      travelled += r.step.used_increment.translation().norm();
+      distance.push_back(travelled);
+      correction.push_back(r.step.cumulative_correction.translation().norm());
+    }
+    const Axes axes{area, 0.0, std::max(travelled, 1e-6), 0.0, peak(correction)};
+    DrawAxes(img, axes, "distance travelled (registered) [m]",
+             "cumulative correction of dead reckoning [m]");
+    DrawLine(img, axes, distance, correction, Colour(1), 2);
+    legend = {{"|registered - dead reckoning| (no ground truth)", Colour(1)}};
+  }
+  DrawLegend(img, legend, {area.x + 15, area.y + 20});
+  WritePng(path, img);
+}
+
+double PeakRssMb() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,59 @@
+#pragma once
+// The drift report of a run (DESIGN §6): drift.csv (one row per frame), summary.json and
+// drift.png, from the mapper's per-frame results.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "eval/EvalOptions.hpp"
+#include "eval/TrajectoryMetrics.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+/// drift.csv: a header row, then per frame: index, timestamp, the increment correction (dx dy
+/// dz m, droll dpitch dyaw deg), the cumulative correction (same six, `cum_` prefix), status,
+/// fallback_reason, odometry_directions (space separated, e.g. "x y yaw"), iterations, inliers,
+/// inlier_ratio, rms_m, time_ms; then matcher_status, conditioning, points, outliers_removed and
+/// the quoted detail.
+std::string DriftCsv(const std::vector<FrameResult>& results);
+
+/// Registered and dead-reckoning trajectories against the ground truth, over the frames that
+/// carry a true pose (all of them when the sequence has groundtruth.tum).
+struct DriftMetrics {
+  eval::TrajectoryMetrics registered;
+  eval::TrajectoryMetrics odometry;
+};
+/// nullopt when fewer than two frames carry a true pose. Never throws.
+std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& results,
+                                          const eval::EvalOptions& options);
+
+/// What the caller measured around the mapper.
+struct RunInfo {
+  std::string sequence;        ///< input (for the record)
+  double wall_ms = 0.0;        ///< whole run, reading included
+  double write_ms = 0.0;       ///< writing the outputs before summary.json
+  double peak_rss_mb = 0.0;    ///< PeakRssMb() at the end
+};
+
+/// summary.json: frames, registered, partial, fallbacks (whole increment from dead reckoning,
+/// bad frames included), bad_frames, distance_m, final_correction, timing (per stage: total and
+/// per-frame median, ms), frames_per_second, peak_rss_mb, dem and octomap figures, and `metrics`
+/// {registered, odometry} (DESIGN §8 keys) when `drift` is given.
+nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
+                       const std::optional<DriftMetrics>& drift);
+
+/// drift.png: the increment correction per frame (translation, rotation; fallbacks marked) and
+/// the drift against distance travelled: position error against the ground truth (registered
+/// and dead reckoning, aligned at the first pose) when `drift` is given, else the cumulative
+/// correction. Written atomically. @throw io::IoError naming `path`.
+void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
+                    const std::optional<DriftMetrics>& drift);
+
+/// Peak resident set size of this process [MB] (getrusage).
+double PeakRssMb();
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,82 @@
+#include "mapper/FrameJudge.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <sstream>
+
+namespace rovermap::mapper {
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+Judgement Reject(FallbackReason reason, const std::string& detail) {
+  return {false, reason, detail};
+}
+
+}  // namespace
+
+const char* ToString(FallbackReason reason) {
+  switch (reason) {
+    case FallbackReason::kNone: return "none";
+    case FallbackReason::kFirstFrame: return "first_frame";
+    case FallbackReason::kBadFrame: return "bad_frame";
+    case FallbackReason::kNoReference: return "no_reference";
+    case FallbackReason::kRegistrationFailed: return "registration_failed";
+    case FallbackReason::kLowInlierRatio: return "low_inlier_ratio";
+    case FallbackReason::kHighRms: return "high_rms";
+    case FallbackReason::kImplausibleCorrection: return "implausible_correction";
+    case FallbackReason::kMissing: return "missing";
+  }
+  return "unknown";
+}
+
+OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& o) {
+  const double length = std::abs(step_length_m);
+  return {o.odometry_sigma_translation_ratio * length + o.odometry_sigma_translation_m,
+          (o.odometry_sigma_rotation_deg_per_m * length + o.odometry_sigma_rotation_deg) *
+              kDegToRad};
+}
+
+Judgement JudgeRegistration(const registration::RegistrationResult& result,
+                            const MapperOptions& options) {
+  using registration::RegistrationStatus;
+  std::ostringstream why;
+  if (result.status != RegistrationStatus::kConverged &&
+      result.status != RegistrationStatus::kMaxIterations) {
+    why << registration::ToString(result.status);
+    if (!result.message.empty()) why << ": " << result.message;
+    return Reject(FallbackReason::kRegistrationFailed, why.str());
+  }
+  if (!(result.inlier_ratio >= options.min_inlier_ratio)) {
+    why << "inlier_ratio " << result.inlier_ratio << " < " << options.min_inlier_ratio;
+    return Reject(FallbackReason::kLowInlierRatio, why.str());
+  }
+  if (!(result.rms_m <= options.max_rms_m)) {
+    why << "rms " << result.rms_m << " m > " << options.max_rms_m << " m";
+    return Reject(FallbackReason::kHighRms, why.str());
+  }
+  return {true, FallbackReason::kNone, ""};
+}
+
+Judgement JudgeCorrection(const Eigen::Isometry3d& T_predicted,
+                          const Eigen::Isometry3d& T_registered, const MapperOptions& options) {
+  const Eigen::Isometry3d correction = T_predicted.inverse() * T_registered;
+  const OdometrySigma sigma = OdometryStepSigma(T_predicted.translation().norm(), options);
+  const double dt = correction.translation().norm();
+  const double dr = Eigen::AngleAxisd(correction.linear()).angle();
+  const double k = options.correction_gate_sigma;
+  std::ostringstream why;
+  if (!(dt <= k * sigma.translation_m)) {
+    why << "translation correction " << dt << " m > " << k << " sigma (" << sigma.translation_m
+        << " m)";
+    return Reject(FallbackReason::kImplausibleCorrection, why.str());
+  }
+  if (!(dr <= k * sigma.rotation_rad)) {
+    why << "rotation correction " << dr / kDegToRad << " deg > " << k << " sigma ("
+        << sigma.rotation_rad / kDegToRad << " deg)";
+    return Reject(FallbackReason::kImplausibleCorrection, why.str());
+  }
+  return {true, FallbackReason::kNone, ""};
+}
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,284 @@
+#include "mapper/Mapper.hpp"
+
+#include <chrono>
+#include <stdexcept>
+#include <utility>
+
+#include "mapper/Degeneracy.hpp"
+#include "mapper/OutlierFilter.hpp"
+
+namespace rovermap::mapper {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+dem::ElevationMapOptions GridAlongProjection(dem::ElevationMapOptions options,
+                                             const io::Georeference& georef) {
+  // dem.tif is north-up in the projection without resampling when the cells run along its axes.
+  options.grid_rotation_rad = georef.convergence_rad();
+  return options;
+}
+
+io::Georeference MakeGeoreference(const io::SequenceInfo& sequence) {
+  return io::Georeference(sequence.origin, io::ParseBody(sequence.body));
+}
+
+}  // namespace
+
+const char* ToString(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kFirst: return "first";
+    case FrameStatus::kRegistered: return "registered";
+    case FrameStatus::kPartial: return "partial";
+    case FrameStatus::kFallback: return "fallback";
+    case FrameStatus::kBadFrame: return "bad_frame";
+  }
+  return "unknown";
+}
+
+// The outcome of steps 2-5 for one frame.
+struct Mapper::Registered {
+  FrameStatus status = FrameStatus::kFirst;
+  FallbackReason reason = FallbackReason::kFirstFrame;
+  std::string detail;
+  std::optional<Eigen::Isometry3d> T_world_body;  ///< nullopt: dead reckoning
+  Matrix6d covariance_in_previous = Matrix6d::Zero();
+  unsigned odometry_directions = 0;
+  std::optional<registration::RegistrationResult> matcher;
+};
+
+Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
+    : sequence_(sequence),
+      options_(options),
+      sensor_{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options.stereo},
+      georef_(MakeGeoreference(sequence)),
+      elevation_map_(GridAlongProjection(options.dem, georef_)),
+      octomap_(options.octomap),
+      local_map_(static_cast<std::size_t>(std::max(1, options.mapper.local_map_frames))) {
+  if (options.mapper.local_map_frames < 1) {
+    throw std::invalid_argument("mapper.local_map_frames: must be >= 1");
+  }
+}
+
+FrameResult Mapper::ProcessFrame(const io::Frame& frame, double load_ms) {
+  return ProcessLoaded(frame, LoadFrame(frame, sensor_, options_.mapper.min_points), load_ms);
+}
+
+FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, double load_ms) {
+  const auto start = Clock::now();
+  if (!loaded.ok) {
+    SkipFrame(frame.index, frame.timestamp, frame.T_world_body_odom, FallbackReason::kBadFrame,
+              loaded.reason, frame.T_world_body_truth);
+    FrameResult& bad = results_.back();
+    bad.time.load_ms = load_ms;
+    bad.time.stereo_ms = loaded.stereo_ms;
+    bad.time.total_ms = loaded.stereo_ms;
+    bad.dropped_nonfinite = loaded.dropped_nonfinite;
+    return bad;
+  }
+  FrameResult r;
+  r.index = frame.index;
+  r.timestamp = frame.timestamp;
+  r.T_world_body_truth = frame.T_world_body_truth;
+  r.points = loaded.cloud.size();
+  r.dropped_nonfinite = loaded.dropped_nonfinite;
+  r.time.load_ms = load_ms;
+  r.time.stereo_ms = loaded.stereo_ms;
+
+  // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones (§9a).
+  auto prepare_start = Clock::now();
+  auto source =
+      std::make_unique<registration::IndexedCloud>(std::move(loaded.cloud), options_.registration);
+  const OutlierMask isolated = FindIsolatedPoints(
+      source->cloud().points, source->tree(), sensor_.T_body_sensor.translation(),
+      options_.mapper.outlier_radius_factor, options_.mapper.outlier_min_neighbors);
+  r.outliers_removed = isolated.removed;
+  r.time.prepare_ms = MsSince(prepare_start);
+
+  // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction.
+  const auto register_start = Clock::now();
+  const Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
+  r.time.register_ms = MsSince(register_start);
+
+  // 6. Chain the accepted increment (or dead reckoning's).
+  r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
+
+  // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
+  Fuse(source->cloud(), isolated.keep, r.step, &r);
+
+  // 8. Report; this frame becomes the next one's reference.
+  r.status = reg.status;
+  r.fallback_reason = reg.reason;
+  r.detail = reg.detail;
+  r.odometry_directions = reg.odometry_directions;
+  if (reg.matcher) {
+    r.matcher_status = registration::ToString(reg.matcher->status);
+    r.iterations = reg.matcher->iterations;
+    r.inliers = reg.matcher->inliers;
+    r.inlier_ratio = reg.matcher->inlier_ratio;
+    r.rms_m = reg.matcher->rms_m;
+    r.conditioning = reg.matcher->conditioning;
+  }
+  KeepAsReference(std::move(source), r.step,
+                  reg.matcher ? reg.matcher->reference_distance_m : last_reference_distance_m_);
+  r.time.total_ms = loaded.stereo_ms + MsSince(start);
+  results_.push_back(r);
+  return r;
+}
+
+FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
+                              const Eigen::Isometry3d& T_world_body_odom, FallbackReason reason,
+                              const std::string& detail,
+                              const std::optional<Eigen::Isometry3d>& T_world_body_truth) {
+  FrameResult r;
+  r.index = index;
+  r.timestamp = timestamp;
+  r.status = FrameStatus::kBadFrame;
+  r.fallback_reason = reason;
+  r.detail = detail;
+  r.T_world_body_truth = T_world_body_truth;
+  io::Frame meta;
+  meta.index = index;
+  meta.timestamp = timestamp;
+  meta.T_world_body_odom = T_world_body_odom;
+  r.step = Chain(meta, std::nullopt, Matrix6d::Zero());
+  r.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
+  results_.push_back(r);
+  return r;
+}
+
+Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedCloud& source,
+                                                 const Eigen::Isometry3d& T_world_body_odom) {
+  Registered out;
+  if (!chain_) return out;  // frame 0: the chain starts at its dead-reckoning pose
+  if (!reference_index_) {
+    out.reason = FallbackReason::kNoReference;
+    out.detail = "no earlier frame could be used";
+    return out;
+  }
+  out.status = FrameStatus::kFallback;
+  const ChainStep& last = chain_->back();
+  const Eigen::Isometry3d T_world_ref = chain_->steps()[*reference_index_].T_world_body;
+  // 2. Predict: dead reckoning's increment applied to the last chained pose, seen from the
+  // reference frame (the last good frame; the same as the last frame unless it was bad).
+  const Eigen::Isometry3d T_ref_predicted =
+      T_world_ref.inverse() * last.T_world_body * chain_->PredictIncrement(T_world_body_odom);
+  const Matrix6d odometry_covariance = OdometryCovariance(T_ref_predicted);
+
+  // 3. Register onto the previous good frame (its tree and normals reused) or the local map.
+  std::unique_ptr<registration::IndexedCloud> local;
+  if (options_.mapper.reference == Reference::kLocalMap) {
+    const double voxel = options_.mapper.local_map_voxel_m > 0.0 ? options_.mapper.local_map_voxel_m
+                                                                 : last_reference_distance_m_;
+    local = local_map_.Build(T_world_ref, voxel, options_.registration);
+  }
+  const registration::IndexedCloud& target = local ? *local : *previous_;
+  out.matcher = registration::Register(source, target, T_ref_predicted, options_.registration);
+  const registration::RegistrationResult& m = *out.matcher;
+
+  // 4. Judge the registration itself.
+  const Judgement judged = JudgeRegistration(m, options_.mapper);
+  if (!judged.accepted) {
+    out.reason = judged.reason;
+    out.detail = judged.detail;
+    return out;
+  }
+  // 5. Keep dead reckoning in the directions the data do not constrain, then judge the
+  // correction that is left against what odometry can be wrong by.
+  const BlendedIncrement blended =
+      BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
+                     options_.mapper.min_information, odometry_covariance);
+  if (blended.constrained == 0) {
+    out.reason = FallbackReason::kRegistrationFailed;
+    out.detail = "no direction constrained (information ratio below mapper.min_information)";
+    return out;
+  }
+  const Judgement plausible = JudgeCorrection(T_ref_predicted, blended.T, options_.mapper);
+  if (!plausible.accepted) {
+    out.reason = plausible.reason;
+    out.detail = plausible.detail;
+    return out;
+  }
+  out.status = blended.odometry_directions == 0 ? FrameStatus::kRegistered : FrameStatus::kPartial;
+  out.reason = FallbackReason::kNone;
+  out.odometry_directions = blended.odometry_directions;
+  out.T_world_body = T_world_ref * blended.T;
+  // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
+  const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
+  out.covariance_in_previous = A * blended.covariance * A.transpose();
+  return out;
+}
+
+ChainStep Mapper::Chain(const io::Frame& frame,
+                        const std::optional<Eigen::Isometry3d>& T_world_body,
+                        const Matrix6d& covariance_in_previous) {
+  if (!chain_) {
+    chain_ = std::make_unique<PoseChain>(frame.T_world_body_odom);
+    return chain_->back();
+  }
+  if (!T_world_body) {
+    const Eigen::Isometry3d odometry = chain_->PredictIncrement(frame.T_world_body_odom);
+    return chain_->Add(frame.T_world_body_odom, std::nullopt, OdometryCovariance(odometry));
+  }
+  const Eigen::Isometry3d increment = chain_->back().T_world_body.inverse() * *T_world_body;
+  return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous);
+}
+
+Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
+  const OdometrySigma sigma = OdometryStepSigma(increment.translation().norm(), options_.mapper);
+  Matrix6d cov = Matrix6d::Zero();
+  cov.diagonal() << Eigen::Vector3d::Constant(sigma.rotation_rad * sigma.rotation_rad),
+      Eigen::Vector3d::Constant(sigma.translation_m * sigma.translation_m);
+  return cov;
+}
+
+void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
+                  const ChainStep& step, FrameResult* result) {
+  const auto dem_start = Clock::now();
+  const Eigen::Isometry3d& T = step.T_world_body;
+  std::vector<Eigen::Vector3d> points_world;
+  std::vector<Eigen::Matrix3d> covariances;
+  points_world.reserve(cloud.size());
+  const bool has_cov = cloud.HasCovariances();
+  if (has_cov) covariances.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!keep[i]) continue;
+    points_world.push_back(T * cloud.points[i]);
+    if (has_cov) covariances.push_back(cloud.covariances[i]);
+  }
+  dem::FrameContext ctx;
+  ctx.frame = static_cast<std::uint32_t>(step.index);
+  ctx.R_world_cov = T.linear();  // the covariances are in the body frame
+  ctx.sensor_origin_world = T * sensor_.T_body_sensor.translation();
+  // The chain's covariance is a right perturbation of T_world_body; FuseFrame wants a left one
+  // in the world frame about the sensor: Ad([R, t − c]).
+  Eigen::Isometry3d T_about_sensor = T;
+  T_about_sensor.translation() -= ctx.sensor_origin_world;
+  const Matrix6d A = Adjoint(T_about_sensor);
+  ctx.pose_covariance = A * step.covariance * A.transpose();
+  result->dem = elevation_map_.FuseFrame(points_world, covariances, ctx);
+  result->time.fuse_dem_ms = MsSince(dem_start);
+
+  const auto octomap_start = Clock::now();
+  octomap_.InsertFrame(points_world, ctx.sensor_origin_world);
+  result->time.fuse_octomap_ms = MsSince(octomap_start);
+}
+
+void Mapper::KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud,
+                             const ChainStep& step, double reference_distance_m) {
+  reference_index_ = step.index;
+  if (reference_distance_m > 0.0) last_reference_distance_m_ = reference_distance_m;
+  if (options_.mapper.reference == Reference::kPrevious) {
+    previous_ = std::move(cloud);
+    return;
+  }
+  const double voxel = options_.mapper.local_map_voxel_m > 0.0 ? options_.mapper.local_map_voxel_m
+                                                               : last_reference_distance_m_;
+  local_map_.Add(cloud->cloud(), step.T_world_body, voxel);
+}
+
+}  // namespace rovermap::mapper

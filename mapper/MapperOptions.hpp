@@ -1,0 +1,48 @@
+#pragma once
+// Options of the mapping pipeline (config keys under `mapper.`). Plain struct, no dependencies.
+
+namespace rovermap::mapper {
+
+/// What a new frame is registered onto.
+/// kPrevious: the previous good frame (its indexed cloud is reused, never rebuilt).
+/// kLocalMap: the last `local_map_frames` registered frames, voxel-thinned, in one cloud.
+enum class Reference { kPrevious, kLocalMap };
+
+struct MapperOptions {
+  Reference reference = Reference::kPrevious;
+  /// kLocalMap: registered frames kept in the local map [count].
+  int local_map_frames = 5;
+  /// kLocalMap: voxel edge of the local map's thinning [m]; 0 = the registration's D as used
+  /// on the previous frame.
+  double local_map_voxel_m = 0.0;
+
+  /// A frame with fewer usable points than this is a bad frame: not registered, not fused
+  /// [count].
+  int min_points = 100;
+  /// Radius outlier removal before registration and fusion: a point is dropped when fewer than
+  /// `outlier_min_neighbors` other points lie within `outlier_radius_factor` × its expected
+  /// sample spacing (range × median angular spacing of the frame). 0 = off.
+  double outlier_radius_factor = 3.0;
+  int outlier_min_neighbors = 2;
+
+  /// Acceptance of a registration (FrameJudge). The result is rejected (the whole increment
+  /// falls back to dead reckoning) when its inlier ratio is below this [ratio]...
+  double min_inlier_ratio = 0.3;
+  /// ...or its RMS residual above this [m]...
+  double max_rms_m = 0.15;
+  /// ...or its correction of the dead-reckoning increment exceeds `correction_gate_sigma` times
+  /// what wheel odometry can be wrong by over that step: translation σ = ratio × step length +
+  /// floor, rotation σ = deg_per_m × step length + floor [sigma].
+  double correction_gate_sigma = 3.0;
+  double odometry_sigma_translation_ratio = 0.05;  ///< [ratio] of the step length
+  double odometry_sigma_translation_m = 0.02;      ///< [m] per step, floor
+  double odometry_sigma_rotation_deg_per_m = 2.0;  ///< [deg/m] of the step length
+  double odometry_sigma_rotation_deg = 0.5;        ///< [deg] per step, floor
+
+  /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to
+  /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
+  /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.
+  double min_information = 1e-3;
+};
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,47 @@
+#include "mapper/Outputs.hpp"
+
+#include <chrono>
+#include <vector>
+
+#include "io/FileUtil.hpp"
+#include "io/GeoTiff.hpp"
+#include "io/MapPreview.hpp"
+#include "io/OctoMapIo.hpp"
+#include "io/Tum.hpp"
+
+namespace rovermap::mapper {
+
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper,
+                            RunInfo run, const eval::EvalOptions& eval_options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<FrameResult>& results = mapper.results();
+
+  std::vector<io::StampedPose> trajectory, odometry;
+  std::vector<Eigen::Vector3d> registered_xy;
+  for (const FrameResult& r : results) {
+    trajectory.push_back({r.timestamp, r.step.T_world_body, 0});
+    odometry.push_back({r.timestamp, r.step.T_world_body_odom, 0});
+    registered_xy.push_back(r.step.T_world_body.translation());
+  }
+  io::WriteTum(out_dir / "trajectory.tum", trajectory);
+  io::WriteTum(out_dir / "odometry.tum", odometry);
+  io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
+
+  io::WriteDemGeoTiff(out_dir / "dem.tif", mapper.elevation_map(), mapper.georeference());
+  if (const octomap::OcTree* tree = mapper.octomap().tree()) {
+    io::WriteOctoMap(out_dir / "map.bt", *tree);
+    if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
+  }
+  io::WriteDemPreview(out_dir / "dem.png", mapper.elevation_map(), registered_xy);
+  const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
+  WriteDriftPlot(out_dir / "drift.png", results, drift);
+
+  run.write_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
+  const nlohmann::json summary = Summary(mapper, run, drift);
+  io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace rovermap::mapper

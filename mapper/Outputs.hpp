@@ -1,0 +1,23 @@
+#pragma once
+// The replay / serve output set (DESIGN §6), each file written atomically.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "eval/EvalOptions.hpp"
+#include "mapper/DriftReport.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+/// Writes dem.tif, map.bt (map.ot with octomap.write_ot; none when the OctoMap is off),
+/// trajectory.tum, odometry.tum, drift.csv, dem.png, drift.png and, last, summary.json into
+/// `out_dir` (an existing directory), each through a temporary file and a rename, so a reader
+/// sees the previous version or the new one, never a partial file. `run.write_ms` is measured
+/// here; `run.peak_rss_mb` is taken here when 0.
+/// @return the summary written.
+/// @throw io::IoError naming the file that could not be written.
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper,
+                            RunInfo run, const eval::EvalOptions& eval_options);
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,110 @@
+// Per-direction fallback: the registration is kept in the directions its information
+// constrains and the prediction in the others, with the covariance to match.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "mapper/Degeneracy.hpp"
+
+using namespace rovermap::mapper;
+
+namespace {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+Eigen::Isometry3d Pose(const Eigen::Vector3d& rotation_vector, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  if (rotation_vector.norm() > 0)
+    T.linear() = Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized())
+                     .toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+// Information of point-to-plane pairs on the plane z = 0 (normals +z), points spread over
+// ±`half` m: constrains z, roll and pitch only.
+Matrix6d PlaneInformation(double half) {
+  Matrix6d info = Matrix6d::Zero();
+  for (double x = -half; x <= half; x += 0.5) {
+    for (double y = -half; y <= half; y += 0.5) {
+      const Eigen::Vector3d p(x, y, 0.0), n(0, 0, 1);
+      Eigen::Matrix<double, 1, 6> j;
+      j << p.cross(n).transpose(), n.transpose();  // n·(δr × p + δt)
+      info += j.transpose() * j / 1e-4;
+    }
+  }
+  return info;
+}
+
+Matrix6d Diagonal(double rotation_sigma, double translation_sigma) {
+  Matrix6d c = Matrix6d::Zero();
+  c.diagonal() << Eigen::Vector3d::Constant(rotation_sigma * rotation_sigma),
+      Eigen::Vector3d::Constant(translation_sigma * translation_sigma);
+  return c;
+}
+
+}  // namespace
+
+TEST(Degeneracy, DirectionNamesInFixedOrder) {
+  EXPECT_EQ(DirectionNames(0), "");
+  EXPECT_EQ(DirectionNames(kX | kY | kYaw), "yaw x y");
+  EXPECT_EQ(DirectionNames(kRoll | kPitch | kYaw | kX | kY | kZ), "roll pitch yaw x y z");
+}
+
+TEST(Degeneracy, PlaneKeepsPredictionInXYYawAndRegistrationInZRollPitch) {
+  const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0.0, 0.0});
+  // The registration moved every direction; on a plane only z, roll and pitch are trustworthy.
+  const Eigen::Isometry3d registered = Pose({0.01, -0.008, 0.05}, {0.6, 0.05, 0.03});
+  const BlendedIncrement b = BlendIncrement(predicted, registered, PlaneInformation(5.0), 5.0,
+                                            1e-3, Diagonal(0.01, 0.02));
+  EXPECT_EQ(b.odometry_directions, kYaw | kX | kY) << DirectionNames(b.odometry_directions);
+  EXPECT_EQ(b.constrained, 3);
+  EXPECT_LT(b.min_ratio, 1e-12);
+  // x, y and yaw as predicted (to first order in the small rotations), z, roll, pitch as
+  // registered.
+  const Eigen::Isometry3d D = b.T * predicted.inverse();
+  const Eigen::AngleAxisd aa(D.linear());
+  const Eigen::Vector3d dr = aa.angle() * aa.axis();
+  const Eigen::Isometry3d R = registered * predicted.inverse();
+  const Eigen::AngleAxisd ra(R.linear());
+  const Eigen::Vector3d rr = ra.angle() * ra.axis();
+  EXPECT_NEAR(dr.z(), 0.0, 1e-9);
+  EXPECT_NEAR(D.translation().x(), 0.0, 1e-9);
+  EXPECT_NEAR(D.translation().y(), 0.0, 1e-9);
+  EXPECT_NEAR(dr.x(), rr.x(), 1e-9);
+  EXPECT_NEAR(dr.y(), rr.y(), 1e-9);
+  EXPECT_NEAR(D.translation().z(), R.translation().z(), 1e-9);
+  // The covariance: odometry's in x, y, yaw; tiny (registration) in z, roll, pitch.
+  EXPECT_NEAR(b.covariance(2, 2), 1e-4, 1e-9);
+  EXPECT_NEAR(b.covariance(3, 3), 4e-4, 1e-9);
+  EXPECT_NEAR(b.covariance(4, 4), 4e-4, 1e-9);
+  EXPECT_LT(b.covariance(5, 5), 1e-6);
+  EXPECT_LT(b.covariance(0, 0), 1e-6);
+}
+
+TEST(Degeneracy, FullRankInformationKeepsTheRegistrationWhole) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Matrix6d a;
+  for (int i = 0; i < 36; ++i) a(i) = n(rng);
+  const Matrix6d info = a * a.transpose() + Matrix6d::Identity() * 10.0;
+  const Eigen::Isometry3d predicted = Pose({0.01, 0.02, 0.1}, {0.3, -0.1, 0.02});
+  const Eigen::Isometry3d registered = Pose({0.012, 0.018, 0.12}, {0.31, -0.09, 0.025});
+  const BlendedIncrement b =
+      BlendIncrement(predicted, registered, info, 3.0, 1e-6, Diagonal(0.01, 0.02));
+  EXPECT_EQ(b.odometry_directions, 0u);
+  EXPECT_EQ(b.constrained, 6);
+  EXPECT_LT((b.T.matrix() - registered.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  // Covariance = information⁻¹.
+  EXPECT_LT((b.covariance - info.inverse()).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(Degeneracy, ZeroInformationKeepsThePredictionWhole) {
+  const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0, 0});
+  const Eigen::Isometry3d registered = Pose({0, 0, 0.03}, {0.55, 0.01, 0});
+  const BlendedIncrement none = BlendIncrement(predicted, registered, Matrix6d::Zero(), 5.0,
+                                               1e-3, Diagonal(0.01, 0.02));
+  EXPECT_EQ(none.constrained, 0);
+  EXPECT_LT((none.T.matrix() - predicted.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(none.covariance, Diagonal(0.01, 0.02));
+}

@@ -1,0 +1,284 @@
+// `rovermap replay` end to end: the DESIGN §6 output set on the bundled tiny sequences, drift
+// against ground truth on simulated traverses (cloud and stereo), the DEM against the
+// simulator's true terrain, determinism, the per-direction fallback on flat ground, corrupted
+// frames skipped, and bad sequences refused before any output.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/Tum.hpp"
+#include "mapper/PoseChain.hpp"
+#include "tests/support/CommandFixture.hpp"
+
+namespace fs = std::filesystem;
+using rovermap::testing::CommandResult;
+using rovermap::testing::Slurp;
+
+namespace {
+
+const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";
+const fs::path kTinyStereo = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo";
+const std::vector<std::string> kOutputs = {"dem.tif",     "map.bt",    "trajectory.tum",
+                                           "odometry.tum", "drift.csv", "summary.json",
+                                           "dem.png",     "drift.png"};
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '#') lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> Split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"') quoted = !quoted;
+    if (c == ',' && !quoted) {
+      fields.push_back(field);
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields.push_back(field);
+  return fields;
+}
+
+// drift.csv as rows of column name -> text.
+std::vector<std::map<std::string, std::string>> ReadCsv(const fs::path& p) {
+  const std::vector<std::string> lines = Lines(Slurp(p));
+  std::vector<std::map<std::string, std::string>> rows;
+  if (lines.empty()) return rows;
+  const std::vector<std::string> header = Split(lines[0]);
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> fields = Split(lines[i]);
+    std::map<std::string, std::string> row;
+    for (std::size_t k = 0; k < header.size() && k < fields.size(); ++k) row[header[k]] = fields[k];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+class Replay : public rovermap::testing::CommandFixture {
+ protected:
+  // A copy of a bundled sequence that a test may damage.
+  fs::path CopySequence(const fs::path& from, const std::string& name) {
+    const fs::path to = dir_ / name;
+    fs::copy(from, to, fs::copy_options::recursive);
+    return to;
+  }
+
+  fs::path Simulate(const std::string& name, const std::string& sets) {
+    const fs::path seq = dir_ / name;
+    const CommandResult r = Rovermap("simulate --out " + seq.string() + " " + sets);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return seq;
+  }
+
+  nlohmann::json Run(const fs::path& seq, const fs::path& out, const std::string& extra = "") {
+    const CommandResult r = Rovermap("replay " + seq.string() + " --out " + out.string() + " " + extra);
+    EXPECT_EQ(r.status, 0) << r.err;
+    if (r.status != 0) return {};
+    return nlohmann::json::parse(Slurp(out / "summary.json"));
+  }
+
+  void ExpectNoOutput(const fs::path& out) {
+    EXPECT_FALSE(fs::exists(out)) << out << " was created";
+  }
+};
+
+double TranslationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+}  // namespace
+
+TEST_F(Replay, TinyCloudSequenceWritesTheWholeOutputSet) {
+  const fs::path out = dir_ / "out";
+  const CommandResult r = Rovermap("replay " + kTinyCloud.string() + " --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const std::string& name : kOutputs) EXPECT_TRUE(fs::exists(out / name)) << name;
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+  // stdout is the summary; progress went to stderr, one line per frame (not a terminal).
+  const nlohmann::json summary = nlohmann::json::parse(r.out);
+  EXPECT_EQ(summary, nlohmann::json::parse(Slurp(out / "summary.json")));
+  EXPECT_NE(r.err.find("frame 5/5"), std::string::npos) << r.err;
+
+  EXPECT_EQ(summary["frames"], 5);
+  EXPECT_EQ(summary["bad_frames"], 0);
+  EXPECT_EQ(summary["registered"].get<int>() + summary["fallbacks"].get<int>(), 4);
+  for (const char* key : {"distance_m", "final_correction", "timing", "frames_per_second",
+                          "peak_rss_mb", "metrics"})
+    EXPECT_TRUE(summary.contains(key)) << key;
+  for (const char* stage : {"load", "stereo", "register", "fuse_dem", "fuse_octomap", "write"})
+    EXPECT_TRUE(summary["timing"].contains(stage)) << stage;
+  for (const char* which : {"registered", "odometry"})
+    for (const char* key : {"ate_rmse_m", "ate_rmse_origin_m", "rpe_trans_rmse_m",
+                            "rpe_rot_rmse_deg", "kitti_trans_percent", "kitti_rot_deg_per_m",
+                            "pairs", "length_m"})
+      EXPECT_TRUE(summary["metrics"][which].contains(key)) << which << "." << key;
+
+  // One pose per frame, with the sequence's timestamps; frame 0 is odometry pose 0.
+  const auto trajectory = rovermap::io::ReadTum(out / "trajectory.tum");
+  const auto odometry = rovermap::io::ReadTum(kTinyCloud / "odometry.tum");
+  ASSERT_EQ(trajectory.size(), odometry.size());
+  for (std::size_t k = 0; k < trajectory.size(); ++k)
+    EXPECT_DOUBLE_EQ(trajectory[k].timestamp, odometry[k].timestamp);
+  EXPECT_LT(TranslationError(trajectory[0].T_world_body, odometry[0].T_world_body), 1e-9);
+  const auto odometry_out = rovermap::io::ReadTum(out / "odometry.tum");
+  ASSERT_EQ(odometry_out.size(), odometry.size());
+  EXPECT_LT(TranslationError(odometry_out[4].T_world_body, odometry[4].T_world_body), 1e-9);
+
+  const auto rows = ReadCsv(out / "drift.csv");
+  ASSERT_EQ(rows.size(), 5u);
+  for (const char* column :
+       {"index", "timestamp", "dx_m", "dy_m", "dz_m", "droll_deg", "dpitch_deg", "dyaw_deg",
+        "cum_dx_m", "cum_dyaw_deg", "status", "fallback_reason", "odometry_directions",
+        "iterations", "inliers", "inlier_ratio", "rms_m", "time_ms"})
+    EXPECT_TRUE(rows[0].count(column)) << column;
+  EXPECT_EQ(rows[0].at("status"), "first");
+  EXPECT_EQ(rows[0].at("fallback_reason"), "first_frame");
+  EXPECT_EQ(rows[1].at("matcher_status"), "converged");
+}
+
+TEST_F(Replay, TinyStereoSequence) {
+  const nlohmann::json summary = Run(kTinyStereo, dir_ / "out");
+  EXPECT_EQ(summary["frames"], 3);
+  EXPECT_EQ(summary["bad_frames"], 0);
+  EXPECT_GT(summary["timing"]["stereo"]["total_ms"].get<double>(), 0.0);
+  EXPECT_GT(summary["dem"]["cells"].get<int>(), 1000);
+}
+
+TEST_F(Replay, NonEmptyOutputNeedsForce) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  Write("out/keep.txt", "x");
+  CommandResult r = Rovermap("replay " + kTinyCloud.string() + " --out " + out.string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+  r = Rovermap("replay " + kTinyCloud.string() + " --out " + out.string() + " --force");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "keep.txt"));
+}
+
+TEST_F(Replay, BadSequencesStopBeforeAnyOutput) {
+  struct Case {
+    std::string name;
+    std::function<void(const fs::path&)> damage;
+    int status;
+    std::string message;  // must appear in stderr
+  };
+  const std::vector<Case> cases = {
+      {"bad_calibration",
+       [](const fs::path& s) {
+         std::string y = Slurp(s / "sequence.yaml");
+         y.replace(y.find("fx: 300"), 7, "fx: -300");
+         std::ofstream(s / "sequence.yaml") << y;
+       },
+       1, "sequence.yaml:"},
+      {"bad_odometry_line",
+       [](const fs::path& s) {
+         std::vector<std::string> lines = Lines(Slurp(s / "odometry.tum"));
+         lines[2] = "0.5 1 2 3";
+         std::ofstream o(s / "odometry.tum");
+         for (const auto& l : lines) o << l << "\n";
+       },
+       1, "odometry.tum:"},
+      {"missing_odometry", [](const fs::path& s) { fs::remove(s / "odometry.tum"); }, 1,
+       "odometry.tum"},
+      {"frame_without_pose",
+       [](const fs::path& s) { fs::copy_file(s / "frames/000004.ply", s / "frames/000005.ply"); },
+       1, "000005"},
+      {"unknown_key",
+       [](const fs::path& s) { std::ofstream(s / "sequence.yaml", std::ios::app) << "colour: red\n"; },
+       1, "colour"},
+  };
+  for (const Case& c : cases) {
+    const fs::path seq = CopySequence(kTinyCloud, c.name);
+    c.damage(seq);
+    const fs::path out = dir_ / ("out_" + c.name);
+    const CommandResult r = Rovermap("replay " + seq.string() + " --out " + out.string());
+    EXPECT_EQ(r.status, c.status) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
+    ExpectNoOutput(out);
+  }
+  // Usage and config errors: exit 2, nothing written.
+  const fs::path out = dir_ / "out_usage";
+  CommandResult r = Rovermap("replay " + kTinyCloud.string() + " --out " + out.string() +
+                             " --set mapper.reference=nearest");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("mapper.reference"), std::string::npos) << r.err;
+  r = Rovermap("replay " + (dir_ / "nowhere").string() + " --out " + out.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("nowhere"), std::string::npos) << r.err;
+  ExpectNoOutput(out);
+}
+
+TEST_F(Replay, CorruptedFramesAreSkippedAndReported) {
+  const fs::path seq = CopySequence(kTinyCloud, "corrupt");
+  // Frame 2: a PLY cut in the middle of its data. Frame 3: every point NaN.
+  const std::string ply2 = Slurp(seq / "frames/000002.ply");
+  std::ofstream(seq / "frames/000002.ply", std::ios::binary) << ply2.substr(0, ply2.size() / 2);
+  const std::string ply3 = Slurp(seq / "frames/000003.ply");
+  const std::size_t end_header = ply3.find("end_header\n") + 11;
+  std::string header = ply3.substr(0, end_header);
+  const std::size_t vertex = header.find("element vertex ");
+  const std::size_t eol = header.find('\n', vertex);
+  header.replace(vertex, eol - vertex, "element vertex 50");
+  const bool binary = header.find("format ascii") == std::string::npos;
+  std::ostringstream nan_ply;
+  nan_ply << header;
+  // Every property of the vertex element, NaN (the sim writes float x y z nx ny nz).
+  std::size_t properties = 0;
+  for (std::size_t at = header.find("property", vertex); at != std::string::npos;
+       at = header.find("property", at + 1))
+    ++properties;
+  for (int i = 0; i < 50; ++i) {
+    for (std::size_t p = 0; p < properties; ++p) {
+      if (binary) {
+        const float nan = std::nanf("");
+        nan_ply.write(reinterpret_cast<const char*>(&nan), sizeof(nan));
+      } else {
+        nan_ply << (p ? " " : "") << "nan";
+      }
+    }
+    if (!binary) nan_ply << "\n";
+  }
+  std::ofstream(seq / "frames/000003.ply", std::ios::binary) << nan_ply.str();
+
+  const fs::path out = dir_ / "out";
+  const nlohmann::json summary = Run(seq, out);
+  EXPECT_EQ(summary["frames"], 5);
+  EXPECT_EQ(summary["bad_frames"], 2);
+  EXPECT_GE(summary["fallbacks"].get<int>(), 2);
+  const auto rows = ReadCsv(out / "drift.csv");
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[2].at("status"), "bad_frame");
+  EXPECT_NE(rows[2].at("detail").find("000002.ply"), std::string::npos) << rows[2].at("detail");
+  EXPECT_EQ(rows[3].at("status"), "bad_frame");
+  EXPECT_EQ(rows[3].at("odometry_directions"), "roll pitch yaw x y z");
+  // Frame 4 registers onto frame 1, the last good one.
+  EXPECT_NE(rows[4].at("status"), "bad_frame");
+  EXPECT_EQ(rovermap::io::ReadTum(out / "trajectory.tum").size(), 5u);
+}
+
+TEST_F(Replay, IsDeterministic) {
+  const nlohmann::json a = Run(kTinyCloud, dir_ / "a");
+  const nlohmann::json b = Run(kTinyCloud, dir_ / "b");
+  EXPECT_EQ(Slurp(dir_ / "a" / "trajectory.tum"), Slurp(dir_ / "b" / "trajectory.tum"));
+  EXPECT_EQ(a["final_correction"], b["final_correction"]);
+}
