@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -81,6 +82,31 @@ void CheckOutputDirectory(const std::filesystem::path& out, bool force) {
   }
 }
 
+// The figures a rover engineer looks at first, on stderr after the run.
+void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(1) << "replay: " << s["frames"].get<std::size_t>()
+       << " frames (" << s["registered"].get<std::size_t>() << " registered, "
+       << s["partial"].get<std::size_t>() << " of them partly from dead reckoning; "
+       << s["fallbacks"].get<std::size_t>() << " fallbacks, " << s["bad_frames"].get<std::size_t>()
+       << " bad frames), " << s["distance_m"].get<double>() << " m, "
+       << s["frames_per_second"].get<double>() << " frames/s\n";
+  if (s.contains("metrics")) {
+    auto ate = [&](const char* which, const char* key) {
+      const auto& v = s["metrics"][which][key];
+      return v.is_number() ? v.get<double>() : std::nan("");
+    };
+    line << std::setprecision(3) << "replay: position error against the ground truth (ATE, "
+         << "aligned at the first pose / SE(3)-aligned): registered "
+         << ate("registered", "ate_rmse_origin_m") << " / " << ate("registered", "ate_rmse_m")
+         << " m, dead reckoning " << ate("odometry", "ate_rmse_origin_m") << " / "
+         << ate("odometry", "ate_rmse_m") << " m\n";
+  }
+  line << "replay: outputs in " << out.string()
+       << ": dem.tif dem.png map.bt trajectory.tum odometry.tum drift.csv drift.png summary.json\n";
+  std::cerr << line.str();
+}
+
 }  // namespace
 
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
@@ -147,6 +173,7 @@ int RunReplay(const ReplayArgs& args) {
   run.wall_ms = MsSince(start);
   const nlohmann::json summary = mapper::WriteOutputs(out, *mapper, run, cfg.eval);
   std::cout << summary.dump(2) << "\n";
+  ReportHeadline(summary, out);
   return kExitOk;
 }
 

@@ -77,7 +77,7 @@ void BM_DemFusion(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(points.size()));
   state.counters["cells"] = static_cast<double>(map.CellCount());
   state.counters["fused_ratio"] =
-      static_cast<double>(last.fused + last.replaced) / static_cast<double>(last.points);
+      static_cast<double>(last.fused + last.swapped) / static_cast<double>(last.points);
 }
 BENCHMARK(BM_DemFusion)->Arg(0)->Arg(1)->ArgName("covariances")->Unit(benchmark::kMillisecond);
 

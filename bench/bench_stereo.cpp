@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
       rovermap::stereo::StereoOptions o;
       o.algorithm = algorithm;
       if (algorithm == Algorithm::kBm) o.block_size = 11;
+      o = rovermap::stereo::ResolveDisparities(o, camera, width, height, sim.T_body_sensor());
       const double disparity_ms =
           MedianMs(runs, [&] { rovermap::stereo::ComputeDisparity(left, right, o); });
       std::size_t points = 0;

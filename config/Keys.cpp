@@ -90,8 +90,8 @@ std::vector<KeyEntry> BuildRegistry() {
   SectionKeys<S> st(keys, "stereo", &Config::stereo);
   st.Enum("algorithm", &S::algorithm, kStereoAlgorithmNames, "OpenCV matcher (sgbm_3way: 5 paths)");
   st.Int("min_disparity", &S::min_disparity, "px", AnyValue(), "smallest disparity searched");
-  st.Int("num_disparities", &S::num_disparities, "px", GreaterThan(0),
-         "search range; a multiple of 16");
+  st.Int("num_disparities", &S::num_disparities, "px", AtLeast(0),
+         "search range; a multiple of 16; 0 = reach the nearest ground the camera sees");
   st.Int("block_size", &S::block_size, "px", AtLeast(1), "odd window side (bm: 5..255)");
   st.Int("p1", &S::p1, "cost", AtLeast(0), "SGBM penalty, |dd| = 1; 0 = 8 * block^2");
   st.Int("p2", &S::p2, "cost", AtLeast(0), "SGBM penalty, |dd| > 1; 0 = 32 * block^2");
@@ -192,6 +192,10 @@ std::vector<KeyEntry> BuildRegistry() {
                   "height sigma of points without a covariance");
   dem_keys.Double("min_point_variance_m2", &D::min_point_variance_m2, "m^2", AtLeast(0),
                   "floor on a point's height variance");
+  dem_keys.Double("max_horizontal_sigma_cells", &D::max_horizontal_sigma_cells, "cells",
+                  AtLeast(0), "drop points whose horizontal sigma exceeds this; 0 = off");
+  dem_keys.Int("min_support", &D::min_support, "count", AtLeast(1),
+               "points a cell needs before it is published (else NaN)");
 
   using O = dem::OctoMapOptions;
   SectionKeys<O> octo(keys, "octomap", &Config::octomap);

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace rovermap::dem {
 namespace {
@@ -14,6 +15,15 @@ namespace {
   std::ostringstream msg;
   msg << field << ": must be " << rule << " (got " << got << ")";
   throw std::invalid_argument(msg.str());
+}
+
+// Kalman update of a constant height observed directly (H = 1).
+void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
+  const double h = *height_m;
+  const double p = *variance_m2;
+  const double k = p / (p + r);
+  *height_m = static_cast<float>(h + k * (z - h));
+  *variance_m2 = static_cast<float>((1.0 - k) * p);
 }
 
 }  // namespace
@@ -28,6 +38,11 @@ void Validate(const ElevationMapOptions& options) {
   }
   if (!(options.min_point_variance_m2 >= 0.0) || !std::isfinite(options.min_point_variance_m2)) {
     Invalid("min_point_variance_m2", "finite and >= 0", options.min_point_variance_m2);
+  }
+  if (options.min_support < 1) Invalid("min_support", ">= 1", options.min_support);
+  if (!(options.max_horizontal_sigma_cells >= 0.0) ||
+      !std::isfinite(options.max_horizontal_sigma_cells)) {
+    Invalid("max_horizontal_sigma_cells", "finite and >= 0", options.max_horizontal_sigma_cells);
   }
   if (!std::isfinite(options.grid_rotation_rad)) {
     Invalid("grid_rotation_rad", "finite", options.grid_rotation_rad);
@@ -73,53 +88,74 @@ Tile& ElevationMap::TileFor(TileIndex tile_index, FusionStats* stats) {
   return *slot;
 }
 
+bool ElevationMap::WithinGate(double h, double p, double z, double r) const {
+  const double d = z - h;
+  return d * d <= options_.mahalanobis_gate * (p + r);
+}
+
+bool ElevationMap::CandidateTakesOver(const CellRecord& record) const {
+  const CellValue& v = record.value;
+  const CellCandidate& c = record.candidate;
+  if (c.start_frame == record.start_frame) {
+    // One view saw both: a vertical structure (rock face and top). The higher hypothesis wins
+    // once it has support, never as an isolated point.
+    const auto support = static_cast<std::uint32_t>(std::max(2, options_.min_support));
+    if (c.height_m > v.elevation_m) {
+      if (c.count >= support) return true;
+    } else if (v.count >= support) {
+      return false;
+    }
+  }
+  return c.count > v.count;
+}
+
 bool ElevationMap::FuseAt(CellIndex cell, double z, double r, std::uint32_t frame,
                           FusionStats* stats) {
   Tile& tile = TileFor(index_.CellToTile(cell), stats);
   CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
   CellValue& v = record.value;
+  CellCandidate& c = record.candidate;
   const auto zf = static_cast<float>(z);
+  const auto rf = static_cast<float>(r);
   if (v.count == 0) {
-    v = {zf, static_cast<float>(r), zf, zf, 1, frame};
+    v = {zf, rf, zf, zf, 1, frame};
     record.start_frame = frame;
     ++tile.filled;
     bounds_.Extend(cell);
     if (stats != nullptr) ++stats->fused;
     return true;
   }
-  const double h = v.elevation_m;
-  const double p = v.variance_m2;
-  const double d = z - h;
-  const double s = p + r;
-  if (d * d <= options_.mahalanobis_gate * s) {
-    // Kalman update of a constant height observed directly (H = 1).
-    const double k = p / s;
-    v.elevation_m = static_cast<float>(h + k * d);
-    v.variance_m2 = static_cast<float>((1.0 - k) * p);
-    v.min_m = std::min(v.min_m, zf);
-    v.max_m = std::max(v.max_m, zf);
+  bool into_primary = true;
+  if (WithinGate(v.elevation_m, v.variance_m2, z, r)) {
+    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r);
     ++v.count;
     v.last_frame = frame;
     if (stats != nullptr) ++stats->fused;
-    return true;
-  }
-  if (record.start_frame != frame) {  // disagrees with the map built by earlier frames
+  } else if (c.count > 0 && WithinGate(c.height_m, c.variance_m2, z, r)) {
+    KalmanUpdate(&c.height_m, &c.variance_m2, z, r);
+    ++c.count;
+    if (!CandidateTakesOver(record)) {
+      into_primary = false;
+      if (stats != nullptr) ++stats->candidate;
+    } else {
+      std::swap(v.elevation_m, c.height_m);
+      std::swap(v.variance_m2, c.variance_m2);
+      std::swap(v.count, c.count);
+      std::swap(record.start_frame, c.start_frame);
+      v.last_frame = frame;
+      if (stats != nullptr) ++stats->swapped;
+    }
+  } else if (c.count <= 1) {  // a lone point is no evidence to keep: the newer one replaces it
+    c = {zf, rf, 1, frame};
+    into_primary = false;
+    if (stats != nullptr) ++stats->candidate;
+  } else {
     if (stats != nullptr) ++stats->rejected_outliers;
     return false;
   }
-  // Same frame, outside the gate: a vertical structure in the cell; the higher point wins.
   v.min_m = std::min(v.min_m, zf);
   v.max_m = std::max(v.max_m, zf);
-  if (d < 0.0) {
-    if (stats != nullptr) ++stats->below_in_frame;
-    return false;
-  }
-  v.elevation_m = zf;
-  v.variance_m2 = static_cast<float>(r);
-  v.count = 1;
-  v.last_frame = frame;
-  if (stats != nullptr) ++stats->replaced;
-  return true;
+  return into_primary;
 }
 
 bool ElevationMap::FusePoint(const Eigen::Vector3d& point_world, double height_variance_m2,
@@ -156,9 +192,23 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       for (int b = 0; b < 3; ++b) pose_block(a, b) = (*ctx.pose_covariance)(idx[a], idx[b]);
   }
   const Eigen::Vector3d& c = ctx.sensor_origin_world;
+  const Eigen::Matrix<double, 2, 3> horizontal = ctx.R_world_cov.topRows<2>();
+  const double max_h = options_.max_horizontal_sigma_cells * options_.cell_size_m;
+  const bool limit_h = use_cov && options_.max_horizontal_sigma_cells > 0.0;
 
   for (std::size_t k = 0; k < points_world.size(); ++k) {
     const Eigen::Vector3d& p = points_world[k];
+    if (limit_h) {
+      // Largest eigenvalue of the 2×2 horizontal covariance.
+      const Eigen::Matrix2d h = horizontal * covariances[k] * horizontal.transpose();
+      const double mean = 0.5 * (h(0, 0) + h(1, 1));
+      const double half = 0.5 * (h(0, 0) - h(1, 1));
+      if (mean + std::sqrt(half * half + h(0, 1) * h(0, 1)) > max_h * max_h) {
+        ++stats.points;
+        ++stats.dropped_imprecise;
+        continue;
+      }
+    }
     double r = use_cov ? r3.dot(covariances[k] * r3) : default_var;
     if (use_pose) {
       const Eigen::Vector3d j(p.y() - c.y(), -(p.x() - c.x()), 1.0);
@@ -170,17 +220,19 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
 }
 
 void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m2,
-                           std::uint32_t count, std::uint32_t frame) {
+                           std::optional<std::uint32_t> count, std::uint32_t frame) {
+  const std::uint32_t n = count.value_or(static_cast<std::uint32_t>(options_.min_support));
   Tile& tile = TileFor(index_.CellToTile(cell), nullptr);
   CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
   const bool was_filled = record.value.count > 0;
-  if (!std::isfinite(elevation_m) || count == 0) {
+  if (!std::isfinite(elevation_m) || n == 0) {
     record = CellRecord{};
     if (was_filled) --tile.filled;
     return;
   }
   const auto zf = static_cast<float>(elevation_m);
-  record.value = {zf, static_cast<float>(variance_m2), zf, zf, count, frame};
+  record = CellRecord{};
+  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame};
   record.start_frame = frame;
   if (!was_filled) ++tile.filled;
   bounds_.Extend(cell);
@@ -194,17 +246,21 @@ std::optional<CellValue> ElevationMap::Cell(CellIndex cell) const {
   return value;
 }
 
-double ElevationMap::HeightAt(double x_m, double y_m) const {
+std::optional<CellValue> ElevationMap::PublishedAt(double x_m, double y_m) const {
   const auto cell = WorldToCell(x_m, y_m);
-  if (!cell) return std::numeric_limits<double>::quiet_NaN();
+  if (!cell) return std::nullopt;
   const auto value = Cell(*cell);
+  if (!value || !Published(*value)) return std::nullopt;
+  return value;
+}
+
+double ElevationMap::HeightAt(double x_m, double y_m) const {
+  const auto value = PublishedAt(x_m, y_m);
   return value ? value->elevation_m : std::numeric_limits<double>::quiet_NaN();
 }
 
 double ElevationMap::VarianceAt(double x_m, double y_m) const {
-  const auto cell = WorldToCell(x_m, y_m);
-  if (!cell) return std::numeric_limits<double>::quiet_NaN();
-  const auto value = Cell(*cell);
+  const auto value = PublishedAt(x_m, y_m);
   return value ? value->variance_m2 : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -223,6 +279,12 @@ std::vector<TileIndex> ElevationMap::TileIndices() const {
 std::size_t ElevationMap::CellCount() const {
   std::size_t n = 0;
   for (const auto& entry : tiles_) n += entry.second->filled;
+  return n;
+}
+
+std::size_t ElevationMap::PublishedCellCount() const {
+  std::size_t n = 0;
+  ForEachPublishedCell([&n](CellIndex, const CellValue&) { ++n; });
   return n;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // The elevation grid: sparse 256×256-cell tiles allocated on first touch (GridIndex), six
-// layers per cell, and per-cell Kalman fusion of registered points (DESIGN §3, §9).
+// layers per cell, and per-cell two-hypothesis Kalman fusion of registered points (DESIGN §3,
+// §9, §9a).
 //
 // Grid frame. Cells are laid out in a horizontal frame rotated from the world (ENU) frame by
 // `grid_rotation_rad` (counter-clockwise about z): p_grid = R(θ)·(x_world, y_world). The map
@@ -8,16 +9,27 @@
 // projection north and the GeoTIFF needs no resampling (io/Georeference.hpp); θ = 0 is plain ENU.
 // Heights are world z (metres above the origin's altitude) in every frame.
 //
-// Fusion rule for a point with height z and variance r landing in a cell with estimate (h, σ²):
-//  - empty cell: h = z, σ² = r;
-//  - Mahalanobis test d² = (z − h)² / (σ² + r) <= gate: Kalman update
+// Fusion (DESIGN §9a: 1–2 % of stereo points are mismatches off the surface along their ray, and
+// a spike reads as a rock). Each cell holds two height hypotheses: the primary (the estimate
+// published as elevation, variance, count, min, max and last frame; and its start frame) and a
+// candidate (height, variance, count, start frame). A point with height z and variance r, against a
+// hypothesis (h, σ²), passes the gate when d² = (z − h)² / (σ² + r) <= `mahalanobis_gate`:
+//  - empty cell: the point starts the primary (h = z, σ² = r);
+//  - within the gate of the primary: Kalman update of the primary,
 //    h += K(z − h), σ² = (1 − K)σ², K = σ² / (σ² + r);
-//  - d² > gate and the cell's estimate holds points of EARLIER frames: the point is an outlier
-//    against the map and is rejected (counted, the cell unchanged);
-//  - d² > gate and the estimate was started in THIS frame (only this view has seen the cell):
-//    the cell holds a vertical structure (a rock face, an overhang), and the higher point wins.
-//    A higher point restarts the cell (h = z, σ² = r, count = 1); a lower one is dropped
-//    (counted). Min and max keep both, so max − min shows the structure's height.
+//  - else within the gate of the candidate: Kalman update of the candidate, which then takes
+//    over (the two swap) when it has more points than the primary, or when both started in the
+//    same frame (one view saw both: a rock face and its top), the candidate is higher and it has
+//    at least max(2, min_support) points. While both started in the same frame and the higher
+//    one holds that support, the lower never takes over by count (a face seen under its top);
+//  - else a candidate holding at most one point is replaced by the point; otherwise the point
+//    disagrees with two hypotheses and is rejected (counted).
+// So an isolated outlier first in an empty cell is outvoted by the next two true points, and an
+// isolated higher point in one frame is never adopted. Min and max span every point taken into
+// either hypothesis (rejected points excluded), so max − min shows a step in the cell.
+// Publishing: a cell is published (HeightAt, VarianceAt, ForEachPublishedCell, the writers in
+// io/) only when its primary holds at least `min_support` points; its NaN is better than a spike.
+// Cell and ForEachCell give the raw layers of every cell holding a point.
 // Non-finite points, variances or positions outside the grid are dropped and counted.
 
 #include <Eigen/Core>
@@ -42,6 +54,15 @@ struct ElevationMapOptions {
   double default_point_stddev_m = 0.02;
   /// [m^2] floor on a point's height variance, so one perfect point cannot freeze a cell.
   double min_point_variance_m2 = 1e-6;
+  /// [count] points the primary needs before the cell is published (and before a higher
+  /// hypothesis of the same view takes over, at least 2); >= 1. 1 publishes every cell.
+  int min_support = 3;
+  /// [cells] a point whose horizontal position is less certain than this many cells (the
+  /// larger σ of its covariance's horizontal block) is not fused: a far stereo point lands in
+  /// a cell it may not belong to, and on sloping ground its height is then wrong by the slope ×
+  /// that error, which its height variance does not say. 0 = fuse every point. Needs
+  /// covariances (points without are fused).
+  double max_horizontal_sigma_cells = 2.0;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.
   double grid_rotation_rad = 0.0;
@@ -50,24 +71,36 @@ struct ElevationMapOptions {
 /// @throw std::invalid_argument naming the field if a value is out of range.
 void Validate(const ElevationMapOptions& options);
 
-/// One cell's layers. Empty cells have NaN elevation, variance, min and max and count 0.
+/// One cell's published layers (the primary hypothesis). Empty cells have NaN elevation,
+/// variance, min and max and count 0.
 struct CellValue {
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
   float elevation_m = kEmpty;    ///< fused height [m] (world z)
   float variance_m2 = kEmpty;    ///< variance of elevation_m [m^2]
-  float min_m = kEmpty;          ///< lowest point fused, or dropped by the in-frame rule [m]
+  float min_m = kEmpty;          ///< lowest point taken into either hypothesis [m]
   float max_m = kEmpty;          ///< highest such point [m]
   std::uint32_t count = 0;       ///< points fused into the current estimate
   std::uint32_t last_frame = 0;  ///< frame of the last update
   bool Empty() const { return count == 0; }
 };
 
-/// One cell as stored: its layers and the frame its current estimate started in (for the
-/// in-frame rule). 32 bytes, aligned, so a fusion update touches one cache line.
-struct alignas(32) CellRecord {
-  CellValue value;
-  std::uint32_t start_frame = 0;
+/// A cell's second hypothesis: points that disagree with the primary (see the rule above).
+struct CellCandidate {
+  float height_m = CellValue::kEmpty;     ///< fused height [m]
+  float variance_m2 = CellValue::kEmpty;  ///< its variance [m^2]
+  std::uint32_t count = 0;                ///< points fused into it; 0 = none
+  std::uint32_t start_frame = 0;          ///< frame of its first point
 };
+
+/// One cell as stored: the primary's layers and start frame, then the candidate. 44 bytes, no
+/// padding; README "The maps" gives its fusion speed against the 32-byte one-hypothesis record
+/// and a 48-byte aligned one.
+struct CellRecord {
+  CellValue value;
+  std::uint32_t start_frame = 0;  ///< frame of the primary's first point
+  CellCandidate candidate;
+};
+static_assert(sizeof(CellRecord) == 44, "CellRecord: keep the layout compact (see above)");
 
 /// Storage of one tile: tile_cells² records, row-major, rows south to north
 /// (GridIndex::LinearIndex).
@@ -77,22 +110,23 @@ struct Tile {
   std::size_t filled = 0;  ///< cells with count > 0
 };
 
-/// What FuseFrame did with the points it was given: points = fused + replaced +
-/// below_in_frame + rejected_outliers + dropped_nonfinite + dropped_out_of_grid.
+/// What FuseFrame did with the points it was given: points = fused + candidate + swapped +
+/// rejected_outliers + dropped_nonfinite + dropped_out_of_grid + dropped_imprecise.
 struct FusionStats {
   std::size_t points = 0;               ///< points given
-  std::size_t fused = 0;                ///< Kalman updates and first points of empty cells
-  std::size_t replaced = 0;             ///< in-frame: higher point restarted the cell
-  std::size_t below_in_frame = 0;       ///< in-frame: lower disagreeing point dropped
-  std::size_t rejected_outliers = 0;    ///< failed the gate against an earlier frame
+  std::size_t fused = 0;                ///< into the primary (first points of empty cells too)
+  std::size_t candidate = 0;            ///< into the candidate (started or updated), no swap
+  std::size_t swapped = 0;              ///< into the candidate, which then became the primary
+  std::size_t rejected_outliers = 0;    ///< outside the gate of both hypotheses
   std::size_t dropped_nonfinite = 0;    ///< NaN/inf coordinates; non-finite or negative variance
   std::size_t dropped_out_of_grid = 0;  ///< beyond ±kMaxCellIndex
+  std::size_t dropped_imprecise = 0;    ///< horizontal σ above max_horizontal_sigma_cells
   std::size_t new_tiles = 0;            ///< tiles allocated by this call
 };
 
 /// Per-frame context of FuseFrame.
 struct FrameContext {
-  std::uint32_t frame = 0;  ///< frame index (the in-frame rule compares it)
+  std::uint32_t frame = 0;  ///< frame index (the vertical-structure rule compares start frames)
   /// Rotation taking the covariances' frame into the world frame (e.g. R_world_sensor when
   /// the covariances are in the sensor frame); identity when they are already in world.
   Eigen::Matrix3d R_world_cov = Eigen::Matrix3d::Identity();
@@ -121,15 +155,17 @@ class ElevationMap {
   FusionStats FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
                         const std::vector<Eigen::Matrix3d>& covariances, const FrameContext& ctx);
 
-  /// Fuses one point with a height variance [m^2] (the rule above). Returns false if the point
-  /// was not fused into the height (rejected, dropped or lower in frame). Never throws.
+  /// Fuses one point with a height variance [m^2] (the rule above). Returns true if the point is
+  /// now part of the primary (fused into it, or its candidate took over); false if it went into
+  /// the candidate only, or was rejected or dropped. Never throws.
   bool FusePoint(const Eigen::Vector3d& point_world, double height_variance_m2, std::uint32_t frame,
                  FusionStats* stats = nullptr);
 
-  /// Overwrites one cell (e.g. a simulator's true terrain): elevation and variance, count,
-  /// min = max = elevation. Allocates the tile. A non-finite elevation empties the cell.
-  void SetCell(CellIndex cell, double elevation_m, double variance_m2, std::uint32_t count = 1,
-               std::uint32_t frame = 0);
+  /// Overwrites one cell (e.g. a simulator's true terrain): elevation and variance, count
+  /// (default: min_support, so that the cell is published), min = max = elevation; no candidate.
+  /// Allocates the tile. A non-finite elevation or a count of 0 empties the cell.
+  void SetCell(CellIndex cell, double elevation_m, double variance_m2,
+               std::optional<std::uint32_t> count = std::nullopt, std::uint32_t frame = 0);
 
   /// Grid-frame position of a world position [m]: R(θ)·(x, y).
   Eigen::Vector2d WorldToGrid(double x_m, double y_m) const;
@@ -140,14 +176,22 @@ class ElevationMap {
   /// World (x, y) of a cell's centre [m].
   Eigen::Vector2d CellCenterWorld(CellIndex cell) const;
 
-  /// The cell's layers; nullopt if its tile was never allocated or the cell is empty.
+  /// The cell's raw layers, published or not; nullopt if its tile was never allocated or the
+  /// cell is empty.
   std::optional<CellValue> Cell(CellIndex cell) const;
-  /// Fused height at world (x, y) [m]; NaN if the cell is empty or the input non-finite.
+  /// True if the cell's primary holds at least min_support points: the one test of what the map
+  /// publishes (HeightAt, ForEachPublishedCell, io::WriteDemGeoTiff, io::WriteDemPreview).
+  bool Published(const CellValue& value) const {
+    return value.count >= static_cast<std::uint32_t>(options_.min_support);
+  }
+  /// Published height at world (x, y) [m]; NaN if the cell is not published or the input is
+  /// non-finite.
   double HeightAt(double x_m, double y_m) const;
   /// Variance of that height [m^2]; NaN likewise.
   double VarianceAt(double x_m, double y_m) const;
 
-  /// Calls f(CellIndex, const CellValue&) for every non-empty cell, tile by tile (unordered).
+  /// Calls f(CellIndex, const CellValue&) for every non-empty cell, published or not, tile by
+  /// tile (unordered).
   template <typename F>
   void ForEachCell(F&& f) const {
     const int n = index_.geometry().tile_cells;
@@ -164,13 +208,23 @@ class ElevationMap {
     }
   }
 
+  /// ForEachCell restricted to the published cells (Published).
+  template <typename F>
+  void ForEachPublishedCell(F&& f) const {
+    ForEachCell([&](CellIndex cell, const CellValue& value) {
+      if (Published(value)) f(cell, value);
+    });
+  }
+
   /// The tile holding `tile_index`, or nullptr if never allocated.
   const Tile* FindTile(TileIndex tile_index) const;
   /// Every allocated tile index (unordered).
   std::vector<TileIndex> TileIndices() const;
   std::size_t TileCount() const { return tiles_.size(); }
-  /// Non-empty cells [count].
+  /// Cells holding at least one point, published or not [count] (kept per tile: O(tiles)).
   std::size_t CellCount() const;
+  /// Published cells [count] (scans every allocated cell).
+  std::size_t PublishedCellCount() const;
   /// Bounding box of the cells ever written (grid cells); empty for a new map.
   const CellBounds& bounds() const { return bounds_; }
   /// Bytes held by the tiles' layers (not the hash table overhead).
@@ -181,6 +235,9 @@ class ElevationMap {
  private:
   Tile& TileFor(TileIndex tile_index, FusionStats* stats);
   bool FuseAt(CellIndex cell, double z, double r, std::uint32_t frame, FusionStats* stats);
+  bool WithinGate(double h, double p, double z, double r) const;
+  std::optional<CellValue> PublishedAt(double x_m, double y_m) const;
+  bool CandidateTakesOver(const CellRecord& record) const;
 
   ElevationMapOptions options_;
   GridIndex index_;

@@ -109,7 +109,7 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
       for (int lx = 0; lx < n; ++lx) {
         const std::size_t i = index.LinearIndex({lx, ly});
         const dem::CellValue& v = tile->cells[i].value;
-        if (v.count == 0) continue;
+        if (!map.Published(v)) continue;
         const std::int64_t cx = row_start.x + lx;
         if (cx < min.x || cx > max.x) continue;
         const std::size_t o =

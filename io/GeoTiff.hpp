@@ -29,11 +29,12 @@ struct GeoTiffInfo {
   int width = 0;                         ///< [px] columns (west to east)
   int height = 0;                        ///< [px] rows (north to south)
   std::array<double, 6> geotransform{};  ///< GDAL order: E0, dE/dcol, 0, N0, 0, dN/drow (< 0)
-  std::size_t valid_cells = 0;           ///< pixels with data
+  std::size_t valid_cells = 0;           ///< pixels with data (the published cells)
 };
 
-/// Writes `map` as dem.tif to `path` atomically. The raster covers the map's cell bounds; an
-/// empty map gives one NaN pixel at the origin.
+/// Writes `map` as dem.tif to `path` atomically: its published cells (ElevationMap::Published;
+/// the others are NaN with count 0). The raster covers the map's cell bounds; an empty map gives
+/// one NaN pixel at the origin.
 /// @throw std::invalid_argument if the map's grid_rotation_rad differs from
 ///        georef.convergence_rad() by more than 1e-9 rad (the grid would not be north-up).
 /// @throw IoError naming `path` if GDAL cannot write it, the raster would exceed 2^31 pixels,

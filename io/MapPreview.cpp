@@ -52,7 +52,7 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     WriteFileAtomically(path,
                         std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   };
-  if (map.bounds().Empty() || map.CellCount() == 0) {
+  if (map.bounds().Empty() || map.PublishedCellCount() == 0) {
     cv::Mat image(120, 320, CV_8UC3, kBackground);
     cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
     encode_and_write(image);
@@ -72,7 +72,7 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   float z_min = std::numeric_limits<float>::infinity();
   float z_max = -z_min;
-  map.ForEachCell([&](dem::CellIndex c, const dem::CellValue& v) {
+  map.ForEachPublishedCell([&](dem::CellIndex c, const dem::CellValue& v) {
     const int col = static_cast<int>((c.x - lo.x) / step);
     const int row = static_cast<int>((hi.y - c.y) / step);
     float& px = height.at<float>(row, col);

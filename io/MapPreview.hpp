@@ -19,9 +19,10 @@ struct MapPreviewOptions {
   double hillshade_weight = 0.5;    ///< [ratio] 0 = colour only, 1 = shade only
 };
 
-/// Renders `map` and writes it to `path` (PNG) atomically. `trajectory_world` (world x, y [m];
-/// z ignored) is drawn in white with a black outline when not empty; the start is marked.
-/// An empty map gives a small "no data" image.
+/// Renders `map`'s published cells (ElevationMap::Published) and writes it to `path` (PNG)
+/// atomically. `trajectory_world` (world x, y [m]; z ignored) is drawn in white with a black
+/// outline when not empty; the start is marked. A map with no published cell gives a small
+/// "no data" image.
 /// @throw IoError naming `path` if encoding or writing fails.
 void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
                      const std::vector<Eigen::Vector3d>& trajectory_world = {},

@@ -1,7 +1,10 @@
 #include "io/OctoMapIo.hpp"
 
+#include <fcntl.h>
 #include <octomap/AbstractOcTree.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <sstream>
 
 #include "io/FileUtil.hpp"
@@ -14,7 +17,17 @@ void WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree
   const std::string ext = path.extension().string();
   bool ok = false;
   if (ext == ".bt") {
+    // Debian's liboctomap prints " done." on stderr after a binary write (its debug output is
+    // compiled in); library code here never prints, so stderr points at /dev/null meanwhile.
+    std::fflush(stderr);
+    const int saved = ::dup(2);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null >= 0) ::dup2(null, 2);
     ok = tree.writeBinaryConst(stream);
+    std::fflush(stderr);
+    if (saved >= 0 && null >= 0) ::dup2(saved, 2);
+    if (null >= 0) ::close(null);
+    if (saved >= 0) ::close(saved);
   } else if (ext == ".ot") {
     ok = tree.write(stream);
   } else {

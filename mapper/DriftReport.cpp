@@ -139,11 +139,15 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
       {"peak_rss_mb", run.peak_rss_mb},
       {"dem",
-       {{"cells", map.CellCount()},
+       {{"cells", map.PublishedCellCount()},
+        {"cells_reached", map.CellCount()},
         {"tiles", map.TileCount()},
         {"cell_size_m", map.options().cell_size_m},
         {"outliers_removed", outliers}}},
   };
+  if (mapper.sensor().type == io::SensorType::kStereo) {
+    summary["stereo"] = {{"num_disparities", mapper.sensor().stereo.num_disparities}};
+  }
   if (const auto* tree = mapper.octomap().tree()) {
     summary["octomap"] = {{"leaves", tree->getNumLeafNodes()},
                           {"resolution_m", tree->getResolution()}};

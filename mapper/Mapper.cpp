@@ -6,6 +6,7 @@
 
 #include "mapper/Degeneracy.hpp"
 #include "mapper/OutlierFilter.hpp"
+#include "stereo/Stereo.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -25,6 +26,19 @@ dem::ElevationMapOptions GridAlongProjection(dem::ElevationMapOptions options,
 
 io::Georeference MakeGeoreference(const io::SequenceInfo& sequence) {
   return io::Georeference(sequence.origin, io::ParseBody(sequence.body));
+}
+
+// The sensor as the pipeline uses it: stereo.num_disparities 0 resolved from the camera's
+// height and tilt above the ground.
+SensorSetup MakeSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options) {
+  SensorSetup sensor{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options};
+  if (sequence.camera) {
+    const io::CameraModel& c = *sequence.camera;
+    sensor.stereo = stereo::ResolveDisparities(
+        options, {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0}, c.width, c.height,
+        sequence.T_body_sensor);
+  }
+  return sensor;
 }
 
 }  // namespace
@@ -54,7 +68,7 @@ struct Mapper::Registered {
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
     : sequence_(sequence),
       options_(options),
-      sensor_{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options.stereo},
+      sensor_(MakeSensor(sequence, options.stereo)),
       georef_(MakeGeoreference(sequence)),
       elevation_map_(GridAlongProjection(options.dem, georef_)),
       octomap_(options.octomap),

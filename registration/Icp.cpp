@@ -135,7 +135,10 @@ Eigen::Isometry3d PoseFromParameters(const Eigen::Matrix<double, 6, 1>& x) {
 }
 
 // One Gauss-Newton step of the point-to-plane residual nᵀ(T x − y) for a left
-// perturbation (ω, v): J = [p × n, n]. A tiny damping keeps planar scenes solvable.
+// perturbation (ω, v): J = [p × n, n]. On a plane the normal equations are singular in x, y and
+// yaw; the step is taken only in the eigen-directions of JᵀJ above 1e-9 of the largest (a
+// truncated pseudo-inverse), so that the data's noise does not push the pose along the null
+// directions (a tiny damping did: the iterate wandered and never met the stopping test).
 bool PointToPlaneStep(const IndexedCloud& source, const IndexedCloud& target,
                       const std::vector<Match>& matches, const std::vector<double>& weights,
                       Eigen::Isometry3d* T) {
@@ -155,9 +158,16 @@ bool PointToPlaneStep(const IndexedCloud& source, const IndexedCloud& target,
     g += weights[k] * j * e;
     ++used;
   }
-  if (used < 6) return false;
-  h.diagonal().array() += 1e-9 * std::max(1e-12, h.trace());
-  const Eigen::Matrix<double, 6, 1> delta = h.ldlt().solve(-g);
+  if (used < 6 || !h.allFinite() || !g.allFinite()) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(h);
+  const auto& lambda = eig.eigenvalues();  // ascending
+  if (!(lambda(5) > 0.0)) return false;
+  Eigen::Matrix<double, 6, 1> delta = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int i = 0; i < 6; ++i) {
+    if (lambda(i) <= 1e-9 * lambda(5)) continue;
+    const auto v = eig.eigenvectors().col(i);
+    delta -= v * (v.dot(g) / lambda(i));
+  }
   if (!delta.allFinite()) return false;
   *T = PoseFromParameters(delta) * *T;
   return true;

@@ -35,6 +35,7 @@ io::GeoTiffInfo WriteTerrainGeoTiff(const std::filesystem::path& path, const Sim
       const dem::CellIndex index{x, y};
       const Eigen::Vector2d centre = map.CellCenterWorld(index);
       const double height = simulator.terrain().Height(centre.x(), centre.y());
+      // SetCell's default count is the map's min_support: every true cell is published.
       if (std::isfinite(height)) map.SetCell(index, height, 0.0);
     }
   }

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -54,7 +55,7 @@ const char* ToString(Algorithm algorithm) {
 }
 
 std::string CheckOptions(const StereoOptions& o) {
-  if (o.num_disparities <= 0 || o.num_disparities % 16 != 0)
+  if (o.num_disparities < 0 || o.num_disparities % 16 != 0)
     return "stereo.num_disparities must be a positive multiple of 16";
   if (o.block_size < 1 || o.block_size % 2 == 0) return "stereo.block_size must be odd and >= 1";
   if (o.algorithm == Algorithm::kBm && (o.block_size < 5 || o.block_size > 255))
@@ -82,6 +83,12 @@ DisparityResult ComputeDisparity(const cv::Mat& left_in, const cv::Mat& right_in
   if (const std::string problem = CheckOptions(o); !problem.empty()) {
     result.status = StereoStatus::kInvalidInput;
     result.message = problem;
+    return result;
+  }
+  if (o.num_disparities == 0) {
+    result.status = StereoStatus::kInvalidInput;
+    result.message =
+        "stereo.num_disparities is 0 (automatic): resolve it first (stereo::ResolveDisparities)";
     return result;
   }
   if (left_in.cols <= o.num_disparities + o.block_size) {
@@ -133,6 +140,39 @@ DisparityResult ComputeDisparity(const cv::Mat& left_in, const cv::Mat& right_in
   }
   result.time_ms = MsSince(start);
   return result;
+}
+
+int DisparitiesForGround(const StereoCamera& camera, int width, int height,
+                         const Eigen::Isometry3d& T_body_sensor, const StereoOptions& options) {
+  constexpr double kNearerThanGround = 0.8;  // rocks and relief stand up to 20 % nearer
+  const double height_m = T_body_sensor.translation().z();
+  double nearest_m = std::numeric_limits<double>::infinity();
+  // The nearest ground lies under the image's lower edge; corners and centre cover a roll.
+  for (const double u : {0.0, 0.5 * width, static_cast<double>(width)}) {
+    for (const double v : {0.0, static_cast<double>(height)}) {
+      const Eigen::Vector3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+      const double down = -(T_body_sensor.linear() * ray).z();  // body-z drop per metre of depth
+      if (height_m > 0.0 && down > 0.0) nearest_m = std::min(nearest_m, height_m / down);
+    }
+  }
+  const double depth_m = std::isfinite(nearest_m)
+                             ? std::max(kNearerThanGround * nearest_m, options.min_range_m)
+                             : options.min_range_m;
+  double disparity = camera.fx * camera.baseline_m / std::max(depth_m, 1e-6) -
+                     camera.disparity_offset_px - options.min_disparity;
+  if (!std::isfinite(disparity)) disparity = 256.0;
+  const int widest = std::max(16, (width - options.block_size - 1) / 16 * 16);
+  const int needed = static_cast<int>(std::ceil(std::max(disparity, 1.0) / 16.0)) * 16;
+  return std::clamp(needed, 16, std::min(256, widest));
+}
+
+StereoOptions ResolveDisparities(const StereoOptions& options, const StereoCamera& camera, int width,
+                                 int height, const Eigen::Isometry3d& T_body_sensor) {
+  StereoOptions resolved = options;
+  if (resolved.num_disparities == 0) {
+    resolved.num_disparities = DisparitiesForGround(camera, width, height, T_body_sensor, options);
+  }
+  return resolved;
 }
 
 Eigen::Matrix3d PointCovariance(const Eigen::Vector3d& p, const StereoCamera& c,

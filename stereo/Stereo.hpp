@@ -56,7 +56,21 @@ struct StereoPointsResult {
 };
 
 /// Checks options that OpenCV would otherwise assert on; empty string when usable, else why.
+/// (ComputeDisparity also needs num_disparities resolved: > 0.)
 std::string CheckOptions(const StereoOptions& options);
+
+/// The disparity search range for a camera at `T_body_sensor` over level ground (the body's
+/// z = 0 plane): the largest disparity of the ground any pixel of a width × height image sees,
+/// with objects allowed 20 % nearer than the ground (rocks, relief) but none nearer than
+/// `options.min_range_m`; rounded up to a multiple of 16, at least 16, at most 256 and below
+/// width − block_size. A camera that sees no ground gets the disparity of min_range_m (capped
+/// likewise). Never throws.
+int DisparitiesForGround(const StereoCamera& camera, int width, int height,
+                         const Eigen::Isometry3d& T_body_sensor, const StereoOptions& options);
+
+/// `options` with num_disparities = DisparitiesForGround(...) when it is 0 (unchanged otherwise).
+StereoOptions ResolveDisparities(const StereoOptions& options, const StereoCamera& camera, int width,
+                                 int height, const Eigen::Isometry3d& T_body_sensor);
 
 /// Left disparity of a rectified pair (8-bit grey, or BGR converted to grey), with the
 /// matcher, left-right check, uniqueness and speckle filter of `options`. Never throws.

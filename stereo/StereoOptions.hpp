@@ -13,8 +13,11 @@ struct StereoOptions {
   Algorithm algorithm = Algorithm::kSgbm3Way;
   /// Smallest disparity searched [px].
   int min_disparity = 0;
-  /// Disparity search range [px]; a positive multiple of 16.
-  int num_disparities = 64;
+  /// Disparity search range [px]; a positive multiple of 16, or 0 = from the camera's geometry
+  /// (stereo::ResolveDisparities: enough to reach the nearest ground the camera sees). Too small a
+  /// range does not drop near points: SGBM matches them at a wrong, smaller disparity, i.e. too
+  /// far, below the ground, consistently from frame to frame.
+  int num_disparities = 0;
   /// Matching window side [px]; odd (SGBM 1..11, BM 5..255).
   int block_size = 5;
   /// SGBM smoothness penalties for ±1 and larger disparity changes; 0 = 8·block² and 32·block²

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <set>
@@ -9,6 +11,10 @@
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
+#include "io/GeoTiff.hpp"
+#include "io/Georeference.hpp"
+#include "sim/Simulator.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::dem {
 namespace {
@@ -33,6 +39,13 @@ FrameContext Frame(std::uint32_t frame) {
   FrameContext ctx;
   ctx.frame = frame;
   return ctx;
+}
+
+// Default options but publishing cells from `min_support` points.
+ElevationMapOptions Support(int min_support) {
+  ElevationMapOptions options;
+  options.min_support = min_support;
+  return options;
 }
 
 TEST(ElevationMap, EmptyMapIsNaN) {
@@ -60,6 +73,7 @@ TEST(ElevationMap, RejectsBadOptions) {
   options = {};
   options.default_point_stddev_m = kNaN;
   EXPECT_THROW(ElevationMap{options}, std::invalid_argument);
+  EXPECT_THROW(ElevationMap{Support(0)}, std::invalid_argument);
 }
 
 TEST(ElevationMap, PlaneGivesTheExactPlaneAndShrinkingVariance) {
@@ -107,7 +121,7 @@ TEST(ElevationMap, SlopeSampledAtCellCentresIsExact) {
   }
 }
 
-TEST(ElevationMap, GateRejectsOutliersAgainstEarlierFrames) {
+TEST(ElevationMap, OutliersAgainstEarlierFramesNeverReachThePublishedHeight) {
   ElevationMap map;
   const auto ground = [](double, double) { return 0.0; };
   map.FuseFrame(Sample(ground, 0.0, 2.0, 0.0, 2.0, 20000, 1), {}, Frame(0));
@@ -118,16 +132,19 @@ TEST(ElevationMap, GateRejectsOutliersAgainstEarlierFrames) {
   points.insert(points.end(), spikes.begin(), spikes.end());
   points.insert(points.end(), pits.begin(), pits.end());
   const FusionStats stats = map.FuseFrame(points, {}, Frame(1));
-  // A spike can only pass by landing in a cell no frame-0 point reached (1600 cells, 20000
-  // points: practically never).
-  EXPECT_GE(stats.rejected_outliers, 195u);
-  EXPECT_EQ(stats.points, stats.fused + stats.replaced + stats.below_in_frame +
-                              stats.rejected_outliers + stats.dropped_nonfinite +
-                              stats.dropped_out_of_grid);
-  map.ForEachCell([](CellIndex, const CellValue& v) {
+  // Every cell holds about 12 frame-0 points: a spike becomes (or replaces) a one-point
+  // candidate, or is rejected against two hypotheses; it never takes over.
+  EXPECT_EQ(stats.fused, 20000u);
+  EXPECT_EQ(stats.candidate + stats.rejected_outliers, 200u);
+  EXPECT_EQ(stats.swapped, 0u);
+  EXPECT_EQ(stats.points, stats.fused + stats.candidate + stats.swapped + stats.rejected_outliers +
+                              stats.dropped_nonfinite + stats.dropped_out_of_grid);
+  float highest = 0.0f;
+  map.ForEachCell([&](CellIndex, const CellValue& v) {
     EXPECT_EQ(v.elevation_m, 0.0f);
-    EXPECT_EQ(v.max_m, 0.0f);
+    highest = std::max(highest, v.max_m);
   });
+  EXPECT_EQ(highest, 0.5f);  // min and max span the candidates' points too
 }
 
 TEST(ElevationMap, SmallNoiseIsFusedNotGated) {
@@ -153,25 +170,269 @@ TEST(ElevationMap, SmallNoiseIsFusedNotGated) {
   EXPECT_NEAR(sum / static_cast<double>(n), 0.5, 0.002);
 }
 
-TEST(ElevationMap, InFrameDisagreementHigherPointWins) {
+// The raw record of a cell (both hypotheses), for the rule tests.
+const CellRecord& Record(const ElevationMap& map, CellIndex cell) {
+  const Tile* tile = map.FindTile(map.index().CellToTile(cell));
+  return tile->cells[map.index().LinearIndex(map.index().CellToLocal(cell))];
+}
+
+TEST(ElevationMap, IsolatedOutlierFirstInAnEmptyCellDoesNotBlockTheSurface) {
+  // The outlier comes first, above or below the surface (z = 0); the true points come in later
+  // frames or in the same frame. Two true points outvote it; the third publishes the cell.
+  for (const double outlier : {1.0, -1.0}) {
+    for (const bool same_frame : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << "outlier " << outlier << " same frame " << same_frame);
+      ElevationMap map;
+      FusionStats stats;
+      EXPECT_TRUE(map.FusePoint({0.01, 0.01, outlier}, 1e-4, 0, &stats));
+      EXPECT_TRUE(std::isnan(map.HeightAt(0.01, 0.01)));  // one point: not published
+      for (std::uint32_t k = 1; k <= 3; ++k) {
+        map.FusePoint({0.01 * k, 0.02, 0.0}, 1e-4, same_frame ? 0 : k, &stats);
+      }
+      EXPECT_EQ(stats.fused, 2u);      // the outlier's cell start, then the third true point
+      EXPECT_EQ(stats.candidate, 1u);  // the first true point
+      EXPECT_EQ(stats.swapped, 1u);    // the second: two points against one
+      EXPECT_EQ(map.HeightAt(0.01, 0.01), 0.0);
+      const CellRecord& record = Record(map, {0, 0});
+      EXPECT_EQ(record.value.count, 3u);
+      EXPECT_EQ(record.candidate.count, 1u);  // the outlier, kept as the candidate
+      EXPECT_EQ(record.candidate.height_m, static_cast<float>(outlier));
+      // The next disagreeing point replaces the one-point candidate; a second one is rejected
+      // against two hypotheses that both hold more than one point.
+      map.FusePoint({0.01, 0.01, 0.5}, 1e-4, 9, &stats);
+      map.FusePoint({0.01, 0.01, 0.5}, 1e-4, 9, &stats);
+      map.FusePoint({0.01, 0.01, -0.7}, 1e-4, 9, &stats);
+      EXPECT_EQ(stats.rejected_outliers, 1u);
+      EXPECT_EQ(map.HeightAt(0.01, 0.01), 0.0);
+    }
+  }
+}
+
+TEST(ElevationMap, IsolatedHigherPointInOneFrameIsNeverAdopted) {
+  // Even with min_support 1 (every cell published) the vertical-structure rule needs two points.
+  for (const int min_support : {1, 3}) {
+    ElevationMap map(Support(min_support));
+    FusionStats stats;
+    for (int k = 0; k < 4; ++k) map.FusePoint({0.01, 0.01, 0.0}, 1e-4, 3, &stats);
+    // Higher points, each at its own height (mismatches along their rays), same frame.
+    for (const double z : {0.4, 0.9, 0.25, 1.3}) {
+      EXPECT_FALSE(map.FusePoint({0.02, 0.02, z}, 1e-4, 3, &stats));
+      map.FusePoint({0.03, 0.03, 0.0}, 1e-4, 3, &stats);
+    }
+    EXPECT_EQ(stats.swapped, 0u);
+    EXPECT_EQ(stats.candidate, 4u);
+    EXPECT_EQ(map.HeightAt(0.01, 0.01), 0.0);
+    EXPECT_EQ(map.Cell({0, 0})->max_m, 1.3f);
+    // Min support 1: a lone point in an empty cell is published as it is (the old behaviour).
+    map.FusePoint({1.01, 1.01, 0.5}, 1e-4, 3, &stats);
+    EXPECT_EQ(std::isnan(map.HeightAt(1.01, 1.01)), min_support > 1);
+  }
+}
+
+TEST(ElevationMap, SupportedVerticalStructureInOneViewWins) {
+  // One frame sees a rock face (z = 0.0 .. in the cell, first) and its top (z = 0.4): the top
+  // takes over with min_support = 3 points, then stays although the face has more points.
   ElevationMap map;
   FusionStats stats;
-  EXPECT_TRUE(map.FusePoint({0.01, 0.01, 0.0}, 1e-4, 3, &stats));
-  EXPECT_FALSE(map.FusePoint({0.02, 0.02, -0.5}, 1e-4, 3, &stats));  // lower: dropped
-  EXPECT_EQ(stats.below_in_frame, 1u);
-  EXPECT_TRUE(map.FusePoint({0.03, 0.03, 0.4}, 1e-4, 3, &stats));  // higher: wins
-  EXPECT_EQ(stats.replaced, 1u);
-  const auto v = map.Cell({0, 0});
-  ASSERT_TRUE(v.has_value());
-  EXPECT_EQ(v->elevation_m, 0.4f);
-  EXPECT_EQ(v->count, 1u);
-  EXPECT_EQ(v->min_m, -0.5f);  // the spread of the cell is kept
-  EXPECT_EQ(v->max_m, 0.4f);
-  EXPECT_EQ(v->last_frame, 3u);
-  // A later frame disagreeing is an outlier, higher or not.
-  EXPECT_FALSE(map.FusePoint({0.03, 0.03, 1.4}, 1e-4, 4, &stats));
-  EXPECT_EQ(stats.rejected_outliers, 1u);
-  EXPECT_EQ(map.Cell({0, 0})->elevation_m, 0.4f);
+  for (int k = 0; k < 10; ++k) map.FusePoint({0.01, 0.01, 0.0}, 1e-4, 5, &stats);
+  EXPECT_FALSE(map.FusePoint({0.02, 0.02, 0.4}, 1e-4, 5, &stats));
+  EXPECT_FALSE(map.FusePoint({0.02, 0.02, 0.4}, 1e-4, 5, &stats));
+  EXPECT_EQ(map.HeightAt(0.01, 0.01), 0.0);  // two points of the top are not enough
+  EXPECT_TRUE(map.FusePoint({0.02, 0.02, 0.4}, 1e-4, 5, &stats));
+  EXPECT_EQ(stats.swapped, 1u);
+  for (int k = 0; k < 10; ++k) map.FusePoint({0.01, 0.01, 0.0}, 1e-4, 5, &stats);
+  EXPECT_EQ(stats.swapped, 1u);  // 20 face points under a supported top: the top stays
+  EXPECT_EQ(map.HeightAt(0.01, 0.01), 0.4f);
+  const CellRecord& record = Record(map, {0, 0});
+  EXPECT_EQ(record.value.count, 3u);
+  EXPECT_EQ(record.candidate.count, 20u);
+  EXPECT_EQ(record.value.min_m, 0.0f);  // max − min shows the step
+  EXPECT_EQ(record.value.max_m, 0.4f);
+  EXPECT_EQ(record.value.last_frame, 5u);
+  // Seen first from a later frame, a higher structure is judged by support alone: the top
+  // needs more points than the ground to take over.
+  ElevationMap later;
+  FusionStats later_stats;
+  for (int k = 0; k < 5; ++k) later.FusePoint({0.01, 0.01, 0.0}, 1e-4, 1, &later_stats);
+  for (int k = 0; k < 5; ++k) later.FusePoint({0.01, 0.01, 0.4}, 1e-4, 2, &later_stats);
+  EXPECT_EQ(later.HeightAt(0.01, 0.01), 0.0);
+  later.FusePoint({0.01, 0.01, 0.4}, 1e-4, 2, &later_stats);
+  EXPECT_EQ(later.HeightAt(0.01, 0.01), 0.4f);
+  EXPECT_EQ(later_stats.swapped, 1u);
+}
+
+TEST(ElevationMap, CellsBelowMinSupportAreNaNInHeightAtAndTheGeoTiff) {
+  const io::Georeference georef({46.5, 6.6, 400.0});
+  ElevationMapOptions options;
+  options.grid_rotation_rad = georef.convergence_rad();
+  ElevationMap map(options);
+  // Cell (k, 0) gets k + 1 points (k = 0..4) of height 1 + k.
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector2d c = map.CellCenterWorld({k, 0});
+    for (int n = 0; n <= k; ++n) map.FusePoint({c.x(), c.y(), 1.0 + k}, 1e-4, 0);
+  }
+  EXPECT_EQ(map.CellCount(), 5u);
+  EXPECT_EQ(map.PublishedCellCount(), 3u);
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector2d c = map.CellCenterWorld({k, 0});
+    EXPECT_EQ(std::isnan(map.HeightAt(c.x(), c.y())), k + 1 < 3) << k;
+    EXPECT_EQ(std::isnan(map.VarianceAt(c.x(), c.y())), k + 1 < 3) << k;
+    EXPECT_EQ(map.Cell({k, 0})->count, static_cast<std::uint32_t>(k + 1));  // raw: all cells
+  }
+  const auto file = rovermap::testing::ScratchDir() / "dem.tif";
+  EXPECT_EQ(io::WriteDemGeoTiff(file, map, georef).valid_cells, 3u);
+  const io::DemRaster raster = io::ReadDemGeoTiff(file);
+  ASSERT_EQ(raster.width, 5);
+  ASSERT_EQ(raster.height, 1);
+  for (int k = 0; k < 5; ++k) {
+    if (k + 1 < 3) {
+      EXPECT_TRUE(std::isnan(raster.ElevationAt(k, 0))) << k;
+      EXPECT_EQ(raster.count[static_cast<std::size_t>(k)], 0.0f) << k;
+    } else {
+      EXPECT_EQ(raster.ElevationAt(k, 0), 1.0f + k);
+      EXPECT_EQ(raster.count[static_cast<std::size_t>(k)], static_cast<float>(k + 1));
+    }
+  }
+}
+
+// DESIGN §9a on simulated frames: the simulator's cloud sensor (its stereo error model, default
+// camera and terrain, one point per 4 × 4 pixels) with 2 % of the points moved to a random depth
+// on their ray, fused at the TRUE poses; each published cell is compared with the true terrain
+// height at its centre.
+struct SimulatedFrames {
+  std::vector<std::vector<Eigen::Vector3d>> points;       // world
+  std::vector<std::vector<Eigen::Matrix3d>> covariances;  // sensor frame
+  std::vector<FrameContext> contexts;
+};
+
+SimulatedFrames RenderFrames(const sim::Simulator& simulator) {
+  SimulatedFrames frames;
+  for (std::size_t k = 0; k < simulator.truth().size(); ++k) {
+    sim::SimCloud frame = simulator.RenderCloud(k);
+    const Eigen::Isometry3d T_world_sensor =
+        simulator.truth()[k].T_world_body * simulator.T_body_sensor();
+    for (Eigen::Vector3d& p : frame.cloud.points) p = T_world_sensor * p;
+    FrameContext ctx = Frame(static_cast<std::uint32_t>(k));
+    ctx.R_world_cov = T_world_sensor.linear();
+    ctx.sensor_origin_world = T_world_sensor.translation();
+    frames.points.push_back(std::move(frame.cloud.points));
+    frames.covariances.push_back(std::move(frame.cloud.covariances));
+    frames.contexts.push_back(ctx);
+  }
+  return frames;
+}
+
+ElevationMap Fuse(const SimulatedFrames& frames, const ElevationMapOptions& options) {
+  ElevationMap map(options);
+  for (std::size_t k = 0; k < frames.points.size(); ++k)
+    map.FuseFrame(frames.points[k], frames.covariances[k], frames.contexts[k]);
+  return map;
+}
+
+struct DemQuality {
+  double rmse_m = 0.0;
+  double p95_abs_m = 0.0;
+  double spikes = 0.0;            ///< fraction of the published cells off by more than 0.2 m
+  double coverage_reached = 0.0;  ///< published cells / cells any point reached
+  /// fraction of the cells where outlier-free frames give 3 points that are published
+  double coverage_supported = 0.0;
+};
+
+DemQuality Measure(const ElevationMap& map, const sim::Terrain& terrain,
+                   const ElevationMap& supported) {
+  std::vector<double> errors;
+  map.ForEachPublishedCell([&](CellIndex cell, const CellValue& v) {
+    const Eigen::Vector2d c = map.CellCenterWorld(cell);
+    const double truth = terrain.Height(c.x(), c.y());
+    if (std::isfinite(truth)) errors.push_back(std::abs(v.elevation_m - truth));
+  });
+  DemQuality q;
+  if (errors.empty()) return q;
+  double sum2 = 0.0;
+  for (const double e : errors) {
+    sum2 += e * e;
+    if (e > 0.2) q.spikes += 1.0;
+  }
+  const auto n = static_cast<double>(errors.size());
+  q.rmse_m = std::sqrt(sum2 / n);
+  q.spikes /= n;
+  const std::size_t k95 = (errors.size() - 1) * 95 / 100;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(k95), errors.end());
+  q.p95_abs_m = errors[k95];
+  const auto published = static_cast<double>(map.PublishedCellCount());
+  q.coverage_reached = published / static_cast<double>(map.CellCount());
+  std::size_t kept = 0;
+  supported.ForEachPublishedCell([&](CellIndex cell, const CellValue&) {
+    const auto value = map.Cell(cell);
+    if (value && map.Published(*value)) ++kept;
+  });
+  q.coverage_supported =
+      static_cast<double>(kept) / static_cast<double>(supported.PublishedCellCount());
+  return q;
+}
+
+TEST(ElevationMap, NoSpikesFromOutliersOnTheirRays) {
+  sim::SimOptions o;
+  o.sensor = sim::SensorKind::kCloud;
+  o.frames = 20;  // 3 m of travel, 181 000 points
+  o.outlier_fraction = 0.0;
+  const sim::Simulator clean(o);
+  o.outlier_fraction = 0.02;
+  const sim::Simulator simulator(o);
+  const SimulatedFrames frames = RenderFrames(simulator);
+  // The old rule: a plain per-cell inverse-variance mean (no gate), every cell published. The
+  // horizontal-σ filter is off in these four rows, so that they show the fusion rule alone.
+  ElevationMapOptions plain;
+  plain.mahalanobis_gate = 1e30;
+  plain.min_support = 1;
+  plain.max_horizontal_sigma_cells = 0.0;
+  ElevationMapOptions plain_supported = plain;
+  plain_supported.min_support = 3;
+  ElevationMapOptions robust;  // two hypotheses, min_support 3
+  robust.max_horizontal_sigma_cells = 0.0;
+  ElevationMapOptions one_point = robust;
+  one_point.min_support = 1;
+  const ElevationMap supported = Fuse(RenderFrames(clean), plain_supported);
+  struct Row {
+    const char* rule;
+    DemQuality q;
+  };
+  const Row rows[] = {
+      {"plain mean, min_support 1", Measure(Fuse(frames, plain), simulator.terrain(), supported)},
+      {"plain mean, min_support 3",
+       Measure(Fuse(frames, plain_supported), simulator.terrain(), supported)},
+      {"two hypotheses, min_support 1",
+       Measure(Fuse(frames, one_point), simulator.terrain(), supported)},
+      {"two hypotheses, min_support 3",
+       Measure(Fuse(frames, robust), simulator.terrain(), supported)},
+      {"defaults (+ horizontal sigma)",
+       Measure(Fuse(frames, ElevationMapOptions{}), simulator.terrain(), supported)}};
+  std::printf("%-30s %8s %8s %8s %9s %9s\n", "rule", "rmse_m", "p95_m", ">0.2m", "cov_reach",
+              "cov_supp");
+  for (const Row& row : rows) {
+    std::printf("%-30s %8.4f %8.4f %8.4f %9.3f %9.3f\n", row.rule, row.q.rmse_m, row.q.p95_abs_m,
+                row.q.spikes, row.q.coverage_reached, row.q.coverage_supported);
+  }
+  // Measured (Release, GCC 12): plain mean RMSE 1.98 m, p95 3.24 m, 9.3 % of the cells off by
+  // more than 0.2 m (most of them reached only by outliers, which mostly lie far below the
+  // ground); the defaults RMSE 1.87 cm, p95 4.0 cm, 0.03 % off by 0.2 m, 37 % of the reached
+  // cells and 87.5 % of the cells the outlier-free frames give 3 points.
+  // With the defaults' horizontal-σ filter (2 cells) the far points, whose cell is uncertain,
+  // stay out: RMSE 0.69 cm, p95 1.4 cm, no cell off by 0.2 m, 71 % of the supported cells.
+  const DemQuality& defaults = rows[4].q;
+  EXPECT_LT(defaults.rmse_m, 0.01);
+  EXPECT_LT(defaults.p95_abs_m, 0.02);
+  EXPECT_EQ(defaults.spikes, 0.0);
+  EXPECT_GT(defaults.coverage_supported, 0.65);
+  const DemQuality& before = rows[0].q;
+  const DemQuality& after = rows[3].q;
+  EXPECT_GT(before.rmse_m, 1.0);
+  EXPECT_GT(before.spikes, 0.05);
+  EXPECT_LT(after.rmse_m, 0.025);
+  EXPECT_LT(after.p95_abs_m, 0.05);
+  EXPECT_LT(after.spikes, 0.001);
+  EXPECT_GT(after.coverage_reached, 0.33);
+  EXPECT_GT(after.coverage_supported, 0.83);
 }
 
 TEST(ElevationMap, NonFiniteInputIsCountedAndIgnored) {
@@ -186,7 +447,8 @@ TEST(ElevationMap, NonFiniteInputIsCountedAndIgnored) {
   EXPECT_EQ(stats.fused, 1u);
   EXPECT_EQ(map.CellCount(), 1u);
   EXPECT_EQ(map.TileCount(), 1u);
-  EXPECT_EQ(map.HeightAt(0.1, 0.1), 2.0);
+  EXPECT_EQ(map.Cell(*map.WorldToCell(0.1, 0.1))->elevation_m, 2.0f);
+  EXPECT_TRUE(std::isnan(map.HeightAt(0.1, 0.1)));  // one point: not published
   // A non-finite covariance drops its point as well.
   std::vector<Eigen::Matrix3d> covariances(2, Eigen::Matrix3d::Identity() * 1e-4);
   covariances[1](2, 2) = kNaN;
@@ -234,7 +496,9 @@ TEST(ElevationMap, MemoryFollowsAreaNotPoints) {
 }
 
 TEST(ElevationMap, CovarianceProjectionAndPoseUncertainty) {
-  ElevationMap map;
+  ElevationMapOptions options = Support(1);  // one point per cell
+  options.max_horizontal_sigma_cells = 0.0;   // the covariances below are metres wide
+  ElevationMap map(options);
   // Height variance from a sensor-frame covariance: r3ᵀ Σ r3.
   Eigen::Matrix3d sigma = Eigen::Vector3d(0.01, 0.04, 0.09).asDiagonal();
   FrameContext ctx = Frame(0);
@@ -259,6 +523,7 @@ TEST(ElevationMap, CovarianceProjectionAndPoseUncertainty) {
 TEST(ElevationMap, RotatedGridRoundTrips) {
   ElevationMapOptions options;
   options.grid_rotation_rad = 0.3;
+  options.min_support = 1;
   ElevationMap map(options);
   const Eigen::Vector2d g = map.WorldToGrid(3.0, -2.0);
   const Eigen::Vector2d w = map.GridToWorld(g);
@@ -275,13 +540,13 @@ TEST(ElevationMap, RotatedGridRoundTrips) {
 }
 
 TEST(ElevationMap, MovedMapsKeepWorking) {
-  ElevationMap a;
+  ElevationMap a(Support(1));
   a.FusePoint({0.01, 0.01, 1.0}, 1e-4, 0);
   ElevationMap b = std::move(a);
   EXPECT_EQ(b.HeightAt(0.01, 0.01), 1.0);
   b.FusePoint({0.02, 0.02, 1.0}, 1e-4, 0);
   EXPECT_EQ(b.Cell({0, 0})->count, 2u);
-  a = ElevationMap{};  // the moved-from map is reusable
+  a = ElevationMap{Support(1)};  // the moved-from map is reusable
   a.FusePoint({0.01, 0.01, 3.0}, 1e-4, 0);
   EXPECT_EQ(a.HeightAt(0.01, 0.01), 3.0);
   EXPECT_EQ(b.HeightAt(0.01, 0.01), 1.0);
@@ -293,6 +558,12 @@ TEST(ElevationMap, SetCellWritesAndClears) {
   ASSERT_TRUE(map.Cell({3, 4}).has_value());
   EXPECT_EQ(map.Cell({3, 4})->count, 2u);
   EXPECT_EQ(map.CellCount(), 1u);
+  EXPECT_EQ(map.PublishedCellCount(), 0u);  // 2 points < min_support 3
+  const Eigen::Vector2d centre = map.CellCenterWorld({3, 4});
+  EXPECT_TRUE(std::isnan(map.HeightAt(centre.x(), centre.y())));
+  map.SetCell({3, 4}, 1.5, 0.01);  // the default count publishes
+  EXPECT_EQ(map.Cell({3, 4})->count, 3u);
+  EXPECT_EQ(map.HeightAt(centre.x(), centre.y()), 1.5);
   map.SetCell({3, 4}, kNaN, 0.0);
   EXPECT_FALSE(map.Cell({3, 4}).has_value());
   EXPECT_EQ(map.CellCount(), 0u);

@@ -252,6 +252,40 @@ TEST(StereoMiddlebury, AloeHalfSizeBadPixelRate) {
   }
 }
 
+// ---- the disparity range from the geometry -------------------------------------------------
+
+TEST(StereoDisparities, ReachTheNearestGroundTheCameraSees) {
+  const auto pose = [](double roll_deg, double z_m) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(roll_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+    T.translation() = Eigen::Vector3d(0.2, 0.0, z_m);
+    return T;
+  };
+  StereoOptions o;  // num_disparities 0: automatic
+  // The simulator's mast camera: 1 m up, tilted 30° down, f 300 px, b 0.2 m, 480×360. The
+  // image's lower edge sees the ground 1/(sin 30° + 0.6 cos 30°) = 0.981 m away; 80 % of that
+  // is d = 76.4 px -> 80.
+  const StereoCamera sim{300, 300, 240, 180, 0.2, 0.0};
+  EXPECT_EQ(DisparitiesForGround(sim, 480, 360, pose(-120.0, 1.0), o), 80);
+  // KITTI's rig (datasets/kitti_stereo51): 1.65 m, 1.2° down, f 707.09, b 0.537 m, 1226×370:
+  // ground 5.79 m away at the lower edge, d = 82.1 px at 80 % -> 96.
+  const StereoCamera kitti{707.0912, 707.0912, 601.8873, 183.1104, 0.5371506532679237, 0.0};
+  EXPECT_EQ(DisparitiesForGround(kitti, 1226, 370, pose(-91.2, 1.65), o), 96);
+  // Looking 60° up: no ground; min_range_m decides (0.3 m: d = 200 -> 208), capped by the width.
+  EXPECT_EQ(DisparitiesForGround(sim, 480, 360, pose(-30.0, 1.0), o), 208);
+  EXPECT_EQ(DisparitiesForGround(sim, 160, 120, pose(-30.0, 1.0), o), 144);
+  // A given range is kept; 0 is resolved.
+  o.num_disparities = 32;
+  EXPECT_EQ(ResolveDisparities(o, sim, 480, 360, pose(-120.0, 1.0)).num_disparities, 32);
+  o.num_disparities = 0;
+  EXPECT_EQ(ResolveDisparities(o, sim, 480, 360, pose(-120.0, 1.0)).num_disparities, 80);
+  const cv::Mat image(60, 80, CV_8U, cv::Scalar(100));
+  EXPECT_NE(ComputeDisparity(image, image, o).message.find("ResolveDisparities"),
+            std::string::npos);
+}
+
 // ---- disparity -> points, error model -----------------------------------------------------
 
 StereoCamera SmallCamera() { return {100.0, 100.0, 40.0, 30.0, 0.2, 0.0}; }
