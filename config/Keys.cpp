@@ -196,6 +196,11 @@ std::vector<KeyEntry> BuildRegistry() {
                   AtLeast(0), "drop points whose horizontal sigma exceeds this; 0 = off");
   dem_keys.Int("min_support", &D::min_support, "count", AtLeast(1),
                "points a cell needs before it is published (else NaN)");
+  dem_keys.Int("min_agreeing_neighbors", &D::min_agreeing_neighbors, "count",
+               Bounds{0, false, 8, false},
+               "published only with this many agreeing supported neighbours; 0 = off");
+  dem_keys.Double("neighbor_step_m", &D::neighbor_step_m, "m", AtLeast(0),
+                  "largest height step to an agreeing neighbour (or 3 sigma)");
 
   using O = dem::OctoMapOptions;
   SectionKeys<O> octo(keys, "octomap", &Config::octomap);

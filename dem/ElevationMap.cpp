@@ -40,6 +40,12 @@ void Validate(const ElevationMapOptions& options) {
     Invalid("min_point_variance_m2", "finite and >= 0", options.min_point_variance_m2);
   }
   if (options.min_support < 1) Invalid("min_support", ">= 1", options.min_support);
+  if (options.min_agreeing_neighbors < 0 || options.min_agreeing_neighbors > 8) {
+    Invalid("min_agreeing_neighbors", "in [0, 8]", options.min_agreeing_neighbors);
+  }
+  if (!(options.neighbor_step_m >= 0.0) || !std::isfinite(options.neighbor_step_m)) {
+    Invalid("neighbor_step_m", "finite and >= 0", options.neighbor_step_m);
+  }
   if (!(options.max_horizontal_sigma_cells >= 0.0) ||
       !std::isfinite(options.max_horizontal_sigma_cells)) {
     Invalid("max_horizontal_sigma_cells", "finite and >= 0", options.max_horizontal_sigma_cells);
@@ -246,11 +252,33 @@ std::optional<CellValue> ElevationMap::Cell(CellIndex cell) const {
   return value;
 }
 
+bool ElevationMap::Published(CellIndex cell, const CellValue& value) const {
+  if (!Supported(value)) return false;
+  if (options_.min_agreeing_neighbors <= 0) return true;
+  int agreeing = 0;
+  for (std::int64_t dy = -1; dy <= 1; ++dy) {
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      const auto neighbour = Cell({cell.x + dx, cell.y + dy});
+      if (!neighbour || !Supported(*neighbour)) continue;
+      const double step = std::abs(static_cast<double>(neighbour->elevation_m) - value.elevation_m);
+      const double three_sigma =
+          3.0 * std::sqrt(std::max(0.0, static_cast<double>(neighbour->variance_m2) +
+                                            static_cast<double>(value.variance_m2)));
+      if (step <= std::max(options_.neighbor_step_m, three_sigma) &&
+          ++agreeing >= options_.min_agreeing_neighbors) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 std::optional<CellValue> ElevationMap::PublishedAt(double x_m, double y_m) const {
   const auto cell = WorldToCell(x_m, y_m);
   if (!cell) return std::nullopt;
   const auto value = Cell(*cell);
-  if (!value || !Published(*value)) return std::nullopt;
+  if (!value || !Published(*cell, *value)) return std::nullopt;
   return value;
 }
 

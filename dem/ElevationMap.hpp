@@ -63,6 +63,14 @@ struct ElevationMapOptions {
   /// that error, which its height variance does not say. 0 = fuse every point. Needs
   /// covariances (points without are fused).
   double max_horizontal_sigma_cells = 2.0;
+  /// [count] a supported cell is published only when at least this many of its 8 neighbours
+  /// are supported and agree with it (height step within max(neighbor_step_m, 3σ)): a spike is
+  /// one or two cells high above their neighbours (stereo mismatches that every frame repeats,
+  /// such as the sky above a skyline), a rock is a patch (its corner cells, with 3, are left
+  /// out). 0 = no neighbourhood test; in [0, 8].
+  int min_agreeing_neighbors = 4;
+  /// [m] height step to a neighbour that still agrees (when larger than 3σ of the two cells).
+  double neighbor_step_m = 0.1;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.
   double grid_rotation_rad = 0.0;
@@ -179,11 +187,14 @@ class ElevationMap {
   /// The cell's raw layers, published or not; nullopt if its tile was never allocated or the
   /// cell is empty.
   std::optional<CellValue> Cell(CellIndex cell) const;
-  /// True if the cell's primary holds at least min_support points: the one test of what the map
-  /// publishes (HeightAt, ForEachPublishedCell, io::WriteDemGeoTiff, io::WriteDemPreview).
-  bool Published(const CellValue& value) const {
+  /// True if the cell's primary holds at least min_support points.
+  bool Supported(const CellValue& value) const {
     return value.count >= static_cast<std::uint32_t>(options_.min_support);
   }
+  /// The one test of what the map publishes (HeightAt, ForEachPublishedCell,
+  /// io::WriteDemGeoTiff, io::WriteDemPreview): `value` (the layers of `cell`) is Supported and
+  /// at least min_agreeing_neighbors of its 8 neighbours are Supported and agree with it.
+  bool Published(CellIndex cell, const CellValue& value) const;
   /// Published height at world (x, y) [m]; NaN if the cell is not published or the input is
   /// non-finite.
   double HeightAt(double x_m, double y_m) const;
@@ -212,7 +223,7 @@ class ElevationMap {
   template <typename F>
   void ForEachPublishedCell(F&& f) const {
     ForEachCell([&](CellIndex cell, const CellValue& value) {
-      if (Published(value)) f(cell, value);
+      if (Published(cell, value)) f(cell, value);
     });
   }
 

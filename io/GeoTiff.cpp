@@ -109,8 +109,8 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
       for (int lx = 0; lx < n; ++lx) {
         const std::size_t i = index.LinearIndex({lx, ly});
         const dem::CellValue& v = tile->cells[i].value;
-        if (!map.Published(v)) continue;
         const std::int64_t cx = row_start.x + lx;
+        if (v.count == 0 || !map.Published({cx, row_start.y}, v)) continue;
         if (cx < min.x || cx > max.x) continue;
         const std::size_t o =
             row * static_cast<std::size_t>(width64) + static_cast<std::size_t>(cx - min.x);

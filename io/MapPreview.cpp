@@ -40,6 +40,14 @@ std::string Format(double value, double step) {
 void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
                      const std::vector<Eigen::Vector3d>& trajectory_world,
                      const MapPreviewOptions& options) {
+  std::vector<PreviewTrajectory> trajectories;
+  if (!trajectory_world.empty()) trajectories.push_back({"", {255, 255, 255}, trajectory_world});
+  WriteDemPreview(path, map, trajectories, options);
+}
+
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options) {
   const auto encode_and_write = [&path](const cv::Mat& image) {
     std::vector<unsigned char> png;
     bool ok = false;
@@ -59,9 +67,16 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     return;
   }
 
-  // Raster of the map, decimated by `step` cells per pixel (the cell nearest each pixel).
-  const dem::CellIndex lo = map.bounds().Min();
-  const dem::CellIndex hi = map.bounds().Max();
+  // Raster of the map and the trajectories, decimated by `step` cells per pixel (the cell
+  // nearest each pixel).
+  dem::CellBounds bounds = map.bounds();
+  for (const PreviewTrajectory& trajectory : trajectories) {
+    for (const Eigen::Vector3d& p : trajectory.points) {
+      if (const auto cell = map.WorldToCell(p.x(), p.y())) bounds.Extend(*cell);
+    }
+  }
+  const dem::CellIndex lo = bounds.Min();
+  const dem::CellIndex hi = bounds.Max();
   const std::int64_t cols_cells = hi.x - lo.x + 1;
   const std::int64_t rows_cells = hi.y - lo.y + 1;
   const std::int64_t step =
@@ -124,10 +139,13 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
   const double px_per_m = zoom / pixel_m;
 
-  // Trajectory in grid pixels.
-  if (!trajectory_world.empty()) {
+  // Trajectories in grid pixels.
+  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  for (const PreviewTrajectory& trajectory : trajectories) {
+    const cv::Scalar colour(trajectory.rgb[2], trajectory.rgb[1], trajectory.rgb[0]);
+    if (!trajectory.label.empty()) legend.emplace_back(trajectory.label, colour);
     std::vector<cv::Point> line;
-    for (const Eigen::Vector3d& p : trajectory_world) {
+    for (const Eigen::Vector3d& p : trajectory.points) {
       if (!p.allFinite()) continue;
       const Eigen::Vector2d g = map.WorldToGrid(p.x(), p.y());
       const double gx = g.x() / map.options().cell_size_m - static_cast<double>(lo.x);
@@ -137,9 +155,9 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     }
     if (!line.empty()) {
       cv::polylines(map_image, line, false, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
-      cv::polylines(map_image, line, false, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+      cv::polylines(map_image, line, false, colour, 2, cv::LINE_AA);
       cv::circle(map_image, line.front(), 5, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
-      cv::circle(map_image, line.front(), 3, cv::Scalar(255, 255, 255), cv::FILLED, cv::LINE_AA);
+      cv::circle(map_image, line.front(), 3, colour, cv::FILLED, cv::LINE_AA);
     }
   }
 
@@ -147,7 +165,7 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   const int margin = 20;
   const int bar_w = 20;
   const int legend_w = 110;
-  const int bottom = 50;
+  const int bottom = 50 + 20 * static_cast<int>(legend.size());
   const int bar_h = std::max(100, map_image.rows);
   cv::Mat canvas(std::max(map_image.rows, bar_h + 20) + 2 * margin + bottom,
                  map_image.cols + 2 * margin + legend_w, CV_8UC3, kBackground);
@@ -184,6 +202,14 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   const int nx = margin + map_image.cols - 10;
   cv::arrowedLine(canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
   cv::putText(canvas, "N", {nx - 24, sy + 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
+  int ly = sy + 30;
+  for (const auto& [label, colour] : legend) {
+    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
+    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, colour, 2, cv::LINE_AA);
+    cv::putText(canvas, label, {margin + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
+                cv::LINE_AA);
+    ly += 20;
+  }
   encode_and_write(canvas);
 }
 

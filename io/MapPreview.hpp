@@ -4,7 +4,9 @@
 // orientation as dem.tif).
 
 #include <Eigen/Core>
+#include <array>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
@@ -18,6 +20,21 @@ struct MapPreviewOptions {
   double sun_elevation_deg = 45.0;  ///< [deg] above the horizon
   double hillshade_weight = 0.5;    ///< [ratio] 0 = colour only, 1 = shade only
 };
+
+/// A path to draw on the map, with its legend label and colour.
+struct PreviewTrajectory {
+  std::string label;  ///< legend text ("registered"); empty: no legend line
+  std::array<unsigned char, 3> rgb{255, 255, 255};
+  std::vector<Eigen::Vector3d> points;  ///< world x, y [m] (z ignored)
+};
+
+/// Renders `map`'s published cells with `trajectories` (each a coloured line with a black
+/// outline, its start marked, a legend line under the map) and writes it to `path` (PNG)
+/// atomically. A map with no published cell gives a small "no data" image.
+/// @throw IoError naming `path` if encoding or writing fails.
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options = {});
 
 /// Renders `map`'s published cells (ElevationMap::Published) and writes it to `path` (PNG)
 /// atomically. `trajectory_world` (world x, y [m]; z ignored) is drawn in white with a black

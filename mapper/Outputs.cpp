@@ -17,12 +17,21 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   const std::vector<FrameResult>& results = mapper.results();
 
   std::vector<io::StampedPose> trajectory, odometry;
-  std::vector<Eigen::Vector3d> registered_xy;
+  // dem.png: ground truth (when every frame has it), dead reckoning, registered on top.
+  io::PreviewTrajectory truth_xy{"ground truth", {40, 200, 40}, {}};
+  io::PreviewTrajectory odometry_xy{"dead reckoning", {230, 60, 40}, {}};
+  io::PreviewTrajectory registered_xy{"registered", {255, 255, 255}, {}};
   for (const FrameResult& r : results) {
     trajectory.push_back({r.timestamp, r.step.T_world_body, 0});
     odometry.push_back({r.timestamp, r.step.T_world_body_odom, 0});
-    registered_xy.push_back(r.step.T_world_body.translation());
+    registered_xy.points.push_back(r.step.T_world_body.translation());
+    odometry_xy.points.push_back(r.step.T_world_body_odom.translation());
+    if (r.T_world_body_truth) truth_xy.points.push_back(r.T_world_body_truth->translation());
   }
+  std::vector<io::PreviewTrajectory> drawn;
+  if (truth_xy.points.size() == results.size()) drawn.push_back(std::move(truth_xy));
+  drawn.push_back(std::move(odometry_xy));
+  drawn.push_back(std::move(registered_xy));
   io::WriteTum(out_dir / "trajectory.tum", trajectory);
   io::WriteTum(out_dir / "odometry.tum", odometry);
   io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
@@ -32,7 +41,7 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
     io::WriteOctoMap(out_dir / "map.bt", *tree);
     if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
   }
-  io::WriteDemPreview(out_dir / "dem.png", mapper.elevation_map(), registered_xy);
+  io::WriteDemPreview(out_dir / "dem.png", mapper.elevation_map(), drawn);
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
   WriteDriftPlot(out_dir / "drift.png", results, drift);
 

@@ -41,15 +41,17 @@ FrameContext Frame(std::uint32_t frame) {
   return ctx;
 }
 
-// Default options but publishing cells from `min_support` points.
+// Default options but publishing cells from `min_support` points, each on its own (no
+// neighbourhood test: most cases here look at single cells).
 ElevationMapOptions Support(int min_support) {
   ElevationMapOptions options;
   options.min_support = min_support;
+  options.min_agreeing_neighbors = 0;
   return options;
 }
 
 TEST(ElevationMap, EmptyMapIsNaN) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   EXPECT_TRUE(std::isnan(map.HeightAt(0.0, 0.0)));
   EXPECT_TRUE(std::isnan(map.VarianceAt(1.0, -3.0)));
   EXPECT_TRUE(std::isnan(map.HeightAt(kNaN, 0.0)));
@@ -65,6 +67,7 @@ TEST(ElevationMap, EmptyMapIsNaN) {
 
 TEST(ElevationMap, RejectsBadOptions) {
   ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.cell_size_m = 0.0;
   EXPECT_THROW(ElevationMap{options}, std::invalid_argument);
   options = {};
@@ -77,7 +80,7 @@ TEST(ElevationMap, RejectsBadOptions) {
 }
 
 TEST(ElevationMap, PlaneGivesTheExactPlaneAndShrinkingVariance) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   const auto points = Sample([](double, double) { return 1.25; }, -2.0, 3.0, -1.0, 4.0, 50000);
   const FusionStats stats = map.FuseFrame(points, {}, Frame(0));
   EXPECT_EQ(stats.points, points.size());
@@ -99,7 +102,7 @@ TEST(ElevationMap, PlaneGivesTheExactPlaneAndShrinkingVariance) {
 }
 
 TEST(ElevationMap, SlopeSampledAtCellCentresIsExact) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   const auto slope = [](double x, double y) { return 0.3 * x - 0.2 * y + 2.0; };
   std::vector<Eigen::Vector3d> points;
   for (int i = -40; i < 40; ++i) {
@@ -122,7 +125,7 @@ TEST(ElevationMap, SlopeSampledAtCellCentresIsExact) {
 }
 
 TEST(ElevationMap, OutliersAgainstEarlierFramesNeverReachThePublishedHeight) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   const auto ground = [](double, double) { return 0.0; };
   map.FuseFrame(Sample(ground, 0.0, 2.0, 0.0, 2.0, 20000, 1), {}, Frame(0));
   // Frame 1: the same ground plus 200 spikes 0.5 m up and down (25 sigma).
@@ -148,7 +151,7 @@ TEST(ElevationMap, OutliersAgainstEarlierFramesNeverReachThePublishedHeight) {
 }
 
 TEST(ElevationMap, SmallNoiseIsFusedNotGated) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.02);
   std::size_t fused = 0, total = 0;
@@ -182,7 +185,7 @@ TEST(ElevationMap, IsolatedOutlierFirstInAnEmptyCellDoesNotBlockTheSurface) {
   for (const double outlier : {1.0, -1.0}) {
     for (const bool same_frame : {false, true}) {
       SCOPED_TRACE(::testing::Message() << "outlier " << outlier << " same frame " << same_frame);
-      ElevationMap map;
+      ElevationMap map(Support(3));
       FusionStats stats;
       EXPECT_TRUE(map.FusePoint({0.01, 0.01, outlier}, 1e-4, 0, &stats));
       EXPECT_TRUE(std::isnan(map.HeightAt(0.01, 0.01)));  // one point: not published
@@ -232,7 +235,7 @@ TEST(ElevationMap, IsolatedHigherPointInOneFrameIsNeverAdopted) {
 TEST(ElevationMap, SupportedVerticalStructureInOneViewWins) {
   // One frame sees a rock face (z = 0.0 .. in the cell, first) and its top (z = 0.4): the top
   // takes over with min_support = 3 points, then stays although the face has more points.
-  ElevationMap map;
+  ElevationMap map(Support(3));
   FusionStats stats;
   for (int k = 0; k < 10; ++k) map.FusePoint({0.01, 0.01, 0.0}, 1e-4, 5, &stats);
   EXPECT_FALSE(map.FusePoint({0.02, 0.02, 0.4}, 1e-4, 5, &stats));
@@ -251,7 +254,7 @@ TEST(ElevationMap, SupportedVerticalStructureInOneViewWins) {
   EXPECT_EQ(record.value.last_frame, 5u);
   // Seen first from a later frame, a higher structure is judged by support alone: the top
   // needs more points than the ground to take over.
-  ElevationMap later;
+  ElevationMap later(Support(3));
   FusionStats later_stats;
   for (int k = 0; k < 5; ++k) later.FusePoint({0.01, 0.01, 0.0}, 1e-4, 1, &later_stats);
   for (int k = 0; k < 5; ++k) later.FusePoint({0.01, 0.01, 0.4}, 1e-4, 2, &later_stats);
@@ -264,6 +267,7 @@ TEST(ElevationMap, SupportedVerticalStructureInOneViewWins) {
 TEST(ElevationMap, CellsBelowMinSupportAreNaNInHeightAtAndTheGeoTiff) {
   const io::Georeference georef({46.5, 6.6, 400.0});
   ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.grid_rotation_rad = georef.convergence_rad();
   ElevationMap map(options);
   // Cell (k, 0) gets k + 1 points (k = 0..4) of height 1 + k.
@@ -364,7 +368,7 @@ DemQuality Measure(const ElevationMap& map, const sim::Terrain& terrain,
   std::size_t kept = 0;
   supported.ForEachPublishedCell([&](CellIndex cell, const CellValue&) {
     const auto value = map.Cell(cell);
-    if (value && map.Published(*value)) ++kept;
+    if (value && map.Published(cell, *value)) ++kept;
   });
   q.coverage_supported =
       static_cast<double>(kept) / static_cast<double>(supported.PublishedCellCount());
@@ -381,15 +385,18 @@ TEST(ElevationMap, NoSpikesFromOutliersOnTheirRays) {
   const sim::Simulator simulator(o);
   const SimulatedFrames frames = RenderFrames(simulator);
   // The old rule: a plain per-cell inverse-variance mean (no gate), every cell published. The
-  // horizontal-σ filter is off in these four rows, so that they show the fusion rule alone.
+  // horizontal-σ filter and the neighbourhood test are off in these four rows, so that they
+  // show the fusion rule alone.
   ElevationMapOptions plain;
   plain.mahalanobis_gate = 1e30;
   plain.min_support = 1;
   plain.max_horizontal_sigma_cells = 0.0;
+  plain.min_agreeing_neighbors = 0;
   ElevationMapOptions plain_supported = plain;
   plain_supported.min_support = 3;
   ElevationMapOptions robust;  // two hypotheses, min_support 3
   robust.max_horizontal_sigma_cells = 0.0;
+  robust.min_agreeing_neighbors = 0;
   ElevationMapOptions one_point = robust;
   one_point.min_support = 1;
   const ElevationMap supported = Fuse(RenderFrames(clean), plain_supported);
@@ -418,12 +425,13 @@ TEST(ElevationMap, NoSpikesFromOutliersOnTheirRays) {
   // ground); the defaults RMSE 1.87 cm, p95 4.0 cm, 0.03 % off by 0.2 m, 37 % of the reached
   // cells and 87.5 % of the cells the outlier-free frames give 3 points.
   // With the defaults' horizontal-σ filter (2 cells) the far points, whose cell is uncertain,
-  // stay out: RMSE 0.69 cm, p95 1.4 cm, no cell off by 0.2 m, 71 % of the supported cells.
+  // stay out, and the neighbourhood test drops lone cells: RMSE 0.57 cm, p95 1.2 cm, no cell off
+  // by 0.2 m, 65 % of the supported cells.
   const DemQuality& defaults = rows[4].q;
   EXPECT_LT(defaults.rmse_m, 0.01);
   EXPECT_LT(defaults.p95_abs_m, 0.02);
   EXPECT_EQ(defaults.spikes, 0.0);
-  EXPECT_GT(defaults.coverage_supported, 0.65);
+  EXPECT_GT(defaults.coverage_supported, 0.6);
   const DemQuality& before = rows[0].q;
   const DemQuality& after = rows[3].q;
   EXPECT_GT(before.rmse_m, 1.0);
@@ -436,7 +444,7 @@ TEST(ElevationMap, NoSpikesFromOutliersOnTheirRays) {
 }
 
 TEST(ElevationMap, NonFiniteInputIsCountedAndIgnored) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<Eigen::Vector3d> points = {{kNaN, 0, 0}, {0, kNaN, 0},    {0, 0, kNaN}, {inf, 0, 0},
                                          {0, 0, -inf}, {0.1, 0.1, 2.0}, {1e300, 0, 0}};
@@ -458,7 +466,7 @@ TEST(ElevationMap, NonFiniteInputIsCountedAndIgnored) {
 }
 
 TEST(ElevationMap, TilesOnlyWherePointsFell) {
-  ElevationMap map;  // 0.05 m × 256 = 12.8 m tiles
+  ElevationMap map(Support(3));  // 0.05 m × 256 = 12.8 m tiles
   const auto flat = [](double, double) { return 0.0; };
   auto a = Sample(flat, 1.0, 2.0, 1.0, 2.0, 1000, 1);          // tile (0, 0)
   auto b = Sample(flat, -101.0, -100.5, 50.0, 51.0, 1000, 2);  // tile (-8, 3)
@@ -476,7 +484,7 @@ TEST(ElevationMap, TilesOnlyWherePointsFell) {
 }
 
 TEST(ElevationMap, MemoryFollowsAreaNotPoints) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   const auto flat = [](double, double) { return 0.0; };
   for (std::uint32_t f = 0; f < 20; ++f)
     map.FuseFrame(Sample(flat, 0, 5, 0, 5, 20000, f), {}, Frame(f));
@@ -522,6 +530,7 @@ TEST(ElevationMap, CovarianceProjectionAndPoseUncertainty) {
 
 TEST(ElevationMap, RotatedGridRoundTrips) {
   ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.grid_rotation_rad = 0.3;
   options.min_support = 1;
   ElevationMap map(options);
@@ -553,7 +562,7 @@ TEST(ElevationMap, MovedMapsKeepWorking) {
 }
 
 TEST(ElevationMap, SetCellWritesAndClears) {
-  ElevationMap map;
+  ElevationMap map(Support(3));
   map.SetCell({3, 4}, 1.5, 0.01, 2);
   ASSERT_TRUE(map.Cell({3, 4}).has_value());
   EXPECT_EQ(map.Cell({3, 4})->count, 2u);
@@ -567,6 +576,37 @@ TEST(ElevationMap, SetCellWritesAndClears) {
   map.SetCell({3, 4}, kNaN, 0.0);
   EXPECT_FALSE(map.Cell({3, 4}).has_value());
   EXPECT_EQ(map.CellCount(), 0u);
+}
+
+TEST(ElevationMap, LoneCellsAndOneCellSpikesAreNotPublished) {
+  ElevationMap map;  // the defaults: 4 agreeing neighbours
+  // A flat 1 m × 1 m patch at z = 0, three points per cell, with a one-cell spike of 1 m and a
+  // 3 × 3-cell rock of 0.3 m.
+  const auto fuse = [&](double x, double y, double z) {
+    for (int k = 0; k < 3; ++k) map.FusePoint({x, y, z}, 1e-4, 0);
+  };
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 20; ++j) {
+      const double x = 0.025 + 0.05 * i, y = 0.025 + 0.05 * j;
+      const bool spike = i == 5 && j == 5;
+      const bool rock = i >= 12 && i <= 14 && j >= 12 && j <= 14;
+      fuse(x, y, spike ? 1.0 : rock ? 0.3 : 0.0);
+    }
+  }
+  fuse(5.025, 5.025, 0.0);  // a lone cell far away
+  EXPECT_TRUE(std::isnan(map.HeightAt(0.275, 0.275)));  // the spike
+  EXPECT_NEAR(map.HeightAt(0.675, 0.675), 0.3, 1e-6);     // the rock's centre
+  EXPECT_NEAR(map.HeightAt(0.625, 0.675), 0.3, 1e-6);     // its edge: 5 rock neighbours
+  EXPECT_TRUE(std::isnan(map.HeightAt(0.625, 0.625)));  // its corner: only 3
+  EXPECT_NEAR(map.HeightAt(0.225, 0.275), 0.0, 1e-6);     // beside the spike
+  EXPECT_TRUE(std::isnan(map.HeightAt(5.025, 5.025)));  // the lone cell
+  // All but the spike and the rock's 4 corners (the patch's own corners have 3 neighbours too).
+  EXPECT_EQ(map.PublishedCellCount(), 20u * 20u - 1u - 4u - 4u);
+  ElevationMapOptions off;
+  off.min_agreeing_neighbors = 0;
+  ElevationMap plain(off);
+  for (int k = 0; k < 3; ++k) plain.FusePoint({5.025, 5.025, 0.0}, 1e-4, 0);
+  EXPECT_NEAR(plain.HeightAt(5.025, 5.025), 0.0, 1e-6);
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ template <typename F>
 dem::ElevationMap FillBox(const Georeference& georef, double cell_m, double x0, double x1,
                           double y0, double y1, F f) {
   dem::ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.cell_size_m = cell_m;
   options.grid_rotation_rad = georef.convergence_rad();
   dem::ElevationMap map(options);
@@ -86,6 +87,7 @@ TEST(Georeference, AffineGridMatchesGeographicLibWithinAQuarterCell) {
   for (const GeodeticOrigin& origin : origins) {
     const Georeference georef(origin);
     dem::ElevationMapOptions options;
+    options.min_agreeing_neighbors = 0;  // cells are checked one by one
     options.grid_rotation_rad = georef.convergence_rad();
     const dem::ElevationMap map(options);
     double worst = 0.0;
@@ -176,6 +178,7 @@ TEST(GeoTiff, CornerCellsAgreeWithGeographicLib) {
     const auto flat = [](double, double) { return 1.0; };
     // Only a frame of cells, to keep the raster small but its extent wide.
     dem::ElevationMapOptions options;
+    options.min_agreeing_neighbors = 0;  // cells are checked one by one
     options.cell_size_m = c.cell_m;
     options.grid_rotation_rad = georef.convergence_rad();
     dem::ElevationMap map(options);
@@ -224,6 +227,7 @@ TEST(GeoTiff, CornerCellsAgreeWithGeographicLib) {
 TEST(GeoTiff, EmptyMapAndNaNCells) {
   const Georeference georef({10.0, 10.0, 0.0});
   dem::ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.grid_rotation_rad = georef.convergence_rad();
   dem::ElevationMap map(options);
   const fs::path dir = TempDir("empty");
@@ -252,6 +256,7 @@ TEST(GeoTiff, EmptyMapAndNaNCells) {
 TEST(GeoTiff, CloudOptimizedWithPredictorAndOverviews) {
   const Georeference georef({47.3, 17.8, 400.0});
   dem::ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.grid_rotation_rad = georef.convergence_rad();
   dem::ElevationMap map(options);
   map.SetCell({0, 0}, 1.0, 0.0);
@@ -275,6 +280,7 @@ TEST(GeoTiff, ErrorsNameTheFileAndLeaveNothing) {
   EXPECT_THROW(WriteDemGeoTiff(TempDir("err") / "dem.tif", unrotated, georef),
                std::invalid_argument);
   dem::ElevationMapOptions options;
+  options.min_agreeing_neighbors = 0;  // cells are checked one by one
   options.grid_rotation_rad = georef.convergence_rad();
   dem::ElevationMap map(options);
   map.SetCell({0, 0}, 1.0, 0.0);
