@@ -115,11 +115,16 @@ FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, do
 
   // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction.
   const auto register_start = Clock::now();
-  const Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
+  Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
   r.time.register_ms = MsSince(register_start);
 
   // 6. Chain the accepted increment (or dead reckoning's).
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
+  if (reg.T_world_body && r.step.fallback) {  // PoseChain refused it: not a finite rigid motion
+    reg.status = FrameStatus::kFallback;
+    reg.reason = FallbackReason::kRegistrationFailed;
+    reg.detail = "registered increment is not a finite rigid transform";
+  }
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
@@ -238,7 +243,10 @@ ChainStep Mapper::Chain(const io::Frame& frame,
     const Eigen::Isometry3d odometry = chain_->PredictIncrement(frame.T_world_body_odom);
     return chain_->Add(frame.T_world_body_odom, std::nullopt, OdometryCovariance(odometry));
   }
-  const Eigen::Isometry3d increment = chain_->back().T_world_body.inverse() * *T_world_body;
+  Eigen::Isometry3d increment = chain_->back().T_world_body.inverse() * *T_world_body;
+  // Products of many small rotations drift off orthogonality (the matcher's iterates, the
+  // chain); PoseChain takes only proper rotations, so project onto the nearest one.
+  increment.linear() = Eigen::Quaterniond(increment.linear()).normalized().toRotationMatrix();
   return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous);
 }
 

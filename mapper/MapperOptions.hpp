@@ -42,7 +42,7 @@ struct MapperOptions {
   /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
   /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.
-  double min_information = 1e-3;
+  double min_information = 1e-4;
 };
 
 }  // namespace rovermap::mapper

@@ -92,6 +92,12 @@ ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
   step.fallback = !T_prev_curr_registered || !IsFiniteRigid(*T_prev_curr_registered);
   step.used_increment = step.fallback ? step.odom_increment : *T_prev_curr_registered;
   step.T_world_body = prev.T_world_body * step.used_increment;
+  // Keep the chained rotation on SO(3): Isometry3d::inverse() assumes an orthonormal linear part,
+  // and the rounding of each product, fed back through the next prediction and registration,
+  // grew about five-fold per frame (1e-6 after 15 KITTI frames, when IsFiniteRigid refused
+  // every registered increment).
+  step.T_world_body.linear() =
+      Eigen::Quaterniond(step.T_world_body.linear()).normalized().toRotationMatrix();
   step.increment_correction = step.odom_increment.inverse() * step.used_increment;
   step.cumulative_correction = T_world_body_odom.inverse() * step.T_world_body;
   // T̂(k−1)·Exp(ξ)·Exp(δ)·ΔT̂ ≈ T̂(k−1)·ΔT̂·Exp(Ad(ΔT̂⁻¹)(ξ + δ)) to first order.

@@ -455,3 +455,21 @@ TEST(PoseChain, CovarianceMatchesMonteCarloComposition) {
   }
   EXPECT_TRUE(chain.steps().front().covariance.isZero());
 }
+
+TEST(PoseChain, ChainedRotationsStayOrthonormal) {
+  // Increments whose rotations are off SO(3) by 1e-9 (as products of many small rotations come
+  // out); the chained poses are projected back, so their error does not accumulate.
+  std::mt19937 rng(21);
+  PoseChain chain(Eigen::Isometry3d::Identity());
+  Eigen::Isometry3d odom = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < 2000; ++k) {
+    Eigen::Isometry3d increment = RandomIncrement(rng);
+    increment.linear() *= 1.0 + 1e-9;
+    odom = odom * increment;
+    odom.linear() = Eigen::Quaterniond(odom.linear()).normalized().toRotationMatrix();
+    const ChainStep step = chain.Add(odom, increment);
+    ASSERT_FALSE(step.fallback) << k;
+    const Eigen::Matrix3d R = step.T_world_body.linear();
+    ASSERT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-12) << k;
+  }
+}
