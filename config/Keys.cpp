@@ -77,6 +77,8 @@ std::vector<KeyEntry> BuildRegistry() {
           "PCA normal neighbours if the cloud has none");
   reg.Double("sample_voxel_factor", &R::sample_voxel_factor, "x D", AtLeast(0),
              "match one source point per voxel of this edge; 0 = all points");
+  reg.Int("max_sample_points", &R::max_sample_points, "count", AtLeast(0),
+          "match at most this many sampled points (every k-th); 0 = no limit");
   reg.Bool("coarse_to_fine", &R::coarse_to_fine, "subsample the source for the first iterations");
   reg.Int("coarse_iterations", &R::coarse_iterations, "count", AtLeast(0),
           "iterations on the subsampled source");
@@ -236,6 +238,8 @@ std::vector<KeyEntry> BuildRegistry() {
              "isolated point: few neighbours within factor * range * angular spacing; 0 = off");
   map.Int("outlier_min_neighbors", &P::outlier_min_neighbors, "count", Bounds{0, false, 16, false},
           "neighbours an unisolated point has within that radius");
+  map.Bool("use_point_covariances", &P::use_point_covariances,
+           "register with the points' covariances when both frames carry them");
   map.Double("min_inlier_ratio", &P::min_inlier_ratio, "ratio", Bounds{0, false, 1, false},
              "reject a registration with fewer inliers / sampled points");
   map.Double("max_rms_m", &P::max_rms_m, "m", GreaterThan(0),

@@ -196,7 +196,11 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
     local = local_map_.Build(T_world_ref, voxel, options_.registration);
   }
   const registration::IndexedCloud& target = local ? *local : *previous_;
-  out.matcher = registration::Register(source, target, T_ref_predicted, options_.registration);
+  registration::RegistrationOptions registration = options_.registration;
+  registration.use_uncertainty |= options_.mapper.use_point_covariances &&
+                                  source.cloud().HasCovariances() &&
+                                  target.cloud().HasCovariances();
+  out.matcher = registration::Register(source, target, T_ref_predicted, registration);
   const registration::RegistrationResult& m = *out.matcher;
 
   // 4. Judge the registration itself.

@@ -25,9 +25,15 @@ struct MapperOptions {
   double outlier_radius_factor = 3.0;
   int outlier_min_neighbors = 2;
 
+  /// Register with the points' covariances (registration.use_uncertainty: pairs weighted by
+  /// their inverse covariance, gated by Mahalanobis distance) whenever both frames carry them
+  /// (stereo frames; clouds with a camera in sequence.yaml). Far stereo points, whose depth is
+  /// uncertain by decimetres, then stop pulling the estimate.
+  bool use_point_covariances = true;
+
   /// Acceptance of a registration (FrameJudge). The result is rejected (the whole increment
   /// falls back to dead reckoning) when its inlier ratio is below this [ratio]...
-  double min_inlier_ratio = 0.3;
+  double min_inlier_ratio = 0.2;
   /// ...or its RMS residual above this [m]...
   double max_rms_m = 0.15;
   /// ...or its correction of the dead-reckoning increment exceeds `correction_gate_sigma` times

@@ -208,6 +208,18 @@ bool RelativeConverged(const Eigen::Isometry3d& T_old, const Eigen::Isometry3d& 
   return r_ok && t_ok;
 }
 
+// At most `max_points` of `indices` (0 = all), taken evenly through their order: for a stereo
+// frame in image order this thins every part of the image alike, unlike a coarser voxel grid,
+// which keeps far, noisy points and drops the dense near field.
+std::vector<std::size_t> Decimate(std::vector<std::size_t> indices, int max_points) {
+  if (max_points <= 0 || indices.size() <= static_cast<std::size_t>(max_points)) return indices;
+  const double stride = static_cast<double>(indices.size()) / max_points;
+  std::vector<std::size_t> kept(static_cast<std::size_t>(max_points));
+  for (std::size_t k = 0; k < kept.size(); ++k)
+    kept[k] = indices[static_cast<std::size_t>(static_cast<double>(k) * stride)];
+  return kept;
+}
+
 // Information of the estimate from the final pairs (see RegistrationResult).
 void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
                         const std::vector<Match>& matches, const Eigen::Isometry3d& T,
@@ -369,11 +381,14 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   const double translation_tol =
       options.translation_tolerance_m > 0.0 ? options.translation_tolerance_m : d_ref / 100.0;
 
-  // The source points that are matched: one per voxel of edge sample_voxel_factor · D.
+  // The source points that are matched: one per voxel of edge sample_voxel_factor · D, then at
+  // most max_sample_points of those, evenly through the input order.
   const double voxel_m = options.sample_voxel_factor > 0.0 ? options.sample_voxel_factor * d_ref : 0.0;
-  const std::vector<std::size_t> source_sample = VoxelSample(source.cloud().points, voxel_m);
+  const std::vector<std::size_t> source_sample =
+      Decimate(VoxelSample(source.cloud().points, voxel_m), options.max_sample_points);
   const std::vector<std::size_t> target_sample =
-      symmetric ? VoxelSample(target.cloud().points, voxel_m) : std::vector<std::size_t>();
+      symmetric ? Decimate(VoxelSample(target.cloud().points, voxel_m), options.max_sample_points)
+                : std::vector<std::size_t>();
   result.sample_points = source_sample.size();
   const bool need_orientations = NeedsOrientations(options);
   if (min_abs_cos > 0.0) {

@@ -115,11 +115,14 @@ TEST(Mapper, SimulatedCloudTraverse) {
   sim::SimOptions o;  // the default 30-frame traverse, 4.4 m, 1 % outliers
   o.sensor = sim::SensorKind::kCloud;
   const Traverse t = ReplaySimulated(o, "cloud");
-  // Measured: 0.0284 m against 0.0704 m; DEM 10 950 cells, RMSE 1.75 cm, p95 3.5 cm, none off.
-  EXPECT_LT(t.drift_ratio, 0.5);
+  // Measured: 0.0096 m against 0.0704 m; DEM 11 385 cells, RMSE 2.7 cm, p95 6.4 cm, none off.
+  // (Registered without the points' covariances: 0.0284 m but RMSE 1.75 cm: the simulated dead
+  // reckoning's roll and pitch are exact, so every change registration makes to them, however
+  // small, tilts the far end of the map; the DEM error grows away from the start.)
+  EXPECT_LT(t.drift_ratio, 0.25);
   EXPECT_GT(t.dem.cells, 10000u);
-  EXPECT_LT(t.dem.rmse_m, 0.025);
-  EXPECT_LT(t.dem.p95_m, 0.045);
+  EXPECT_LT(t.dem.rmse_m, 0.035);
+  EXPECT_LT(t.dem.p95_m, 0.075);
   EXPECT_EQ(t.dem.off_20cm, 0u);
 }
 
@@ -127,10 +130,10 @@ TEST(Mapper, SimulatedStereoTraverse) {
   sim::SimOptions o;  // the default mast camera, 12 frames (1.8 m)
   o.frames = 12;
   const Traverse t = ReplaySimulated(o, "stereo");
-  // Measured: 0.0122 m against 0.0247 m; DEM 8784 cells, RMSE 7.1 cm, p95 2.3 cm, 19 cells off
+  // Measured: 0.0103 m against 0.0247 m; DEM 8776 cells, RMSE 7.2 cm, p95 2.5 cm, 18 cells off
   // by more than 0.2 m (0.2 %: steep crater rims, where a few cm of horizontal error are
   // decimetres of height, and skyline cells; over the 30-frame traverse 2 remain).
-  EXPECT_LT(t.drift_ratio, 0.6);
+  EXPECT_LT(t.drift_ratio, 0.55);
   EXPECT_GT(t.dem.cells, 8000u);
   EXPECT_LT(t.dem.rmse_m, 0.1);
   EXPECT_LT(t.dem.p95_m, 0.035);
@@ -166,9 +169,9 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   const auto& odo = run.drift.odometry;
   std::printf("kitti: ATE origin registered %.4f m, dead reckoning %.4f m\n",
               reg.ate_origin_m.rmse, odo.ate_origin_m.rmse);
-  // Measured: 0.286 m against dead reckoning's 0.365 m (its 3 % scale error; the registration
-  // still reads the steps about 1.5 % long on this real stereo).
-  EXPECT_LT(reg.ate_origin_m.rmse, 0.85 * odo.ate_origin_m.rmse);
+  // Measured: 0.223 m against dead reckoning's 0.365 m (its 3 % scale error; the registration
+  // reads the steps about 1 % long on this real stereo).
+  EXPECT_LT(reg.ate_origin_m.rmse, 0.75 * odo.ate_origin_m.rmse);
   // The road: published cells within 1 m of the car's true path must lie on it (the body
   // origin is on the road below the camera), no spikes.
   std::vector<Eigen::Vector3d> path;
@@ -185,7 +188,7 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   });
   std::printf("kitti road: %zu cells, RMSE %.4f m, p95 %.4f m, %zu off by 0.2 m\n", road.cells,
               road.rmse_m, road.p95_m, road.off_20cm);
-  // Measured (20 frames): 13 696 cells, RMSE 11.4 cm, p95 14.5 cm, 1 cell off by more than
+  // Measured (20 frames): 13 694 cells, RMSE 10.9 cm, p95 14.3 cm, no cell off by more than
   // 0.2 m. Most of the RMSE is an offset: the rig's nominal 1.65 m camera height puts the body
   // origin about 6 cm off the road (a plane fit of frame 0 gives 1.59 m, see the dataset's
   // README), and the registered trajectory's own height drift adds to it.
