@@ -22,7 +22,7 @@ struct OctoMapFrameStats {
 };
 
 /// One OcTree fed frame by frame: discretized, lazily evaluated insertion (each voxel updated
-/// once per frame), then one inner-occupancy update per frame.
+/// once per frame); the inner occupancy is updated every 50 frames and when the tree is read.
 class OctoMapFusion {
  public:
   /// @throw std::invalid_argument if `options` are invalid.
@@ -35,12 +35,17 @@ class OctoMapFusion {
   OctoMapFrameStats InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
                                 const Eigen::Vector3d& sensor_origin_world);
 
-  /// The tree; nullptr when disabled.
-  const octomap::OcTree* tree() const { return tree_.get(); }
+  /// The tree with its inner nodes up to date (brought up to date here, not per frame);
+  /// nullptr when disabled. Not thread-safe against InsertFrame.
+  const octomap::OcTree* tree() const;
 
  private:
   OctoMapOptions options_;
+  void UpdateInner() const;
+
   std::unique_ptr<octomap::OcTree> tree_;
+  mutable bool inner_stale_ = false;
+  mutable int frames_since_update_ = 0;
 };
 
 }  // namespace rovermap::dem

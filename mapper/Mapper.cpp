@@ -290,7 +290,7 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   result->time.fuse_dem_ms = MsSince(dem_start);
 
   const auto octomap_start = Clock::now();
-  octomap_.InsertFrame(points_world, ctx.sensor_origin_world);
+  octomap_.Insert(std::move(points_world), ctx.sensor_origin_world);
   result->time.fuse_octomap_ms = MsSince(octomap_start);
 }
 

@@ -19,6 +19,7 @@
 #include "mapper/FrameLoader.hpp"
 #include "mapper/LocalMap.hpp"
 #include "mapper/MapperOptions.hpp"
+#include "mapper/OctoMapWorker.hpp"
 #include "mapper/PoseChain.hpp"
 #include "registration/Icp.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -42,7 +43,7 @@ struct StageTimes {
   double prepare_ms = 0.0;   ///< sensor → body, outlier search, indexing of the reference
   double register_ms = 0.0;  ///< the matcher (incl. its trees and normals)
   double fuse_dem_ms = 0.0;
-  double fuse_octomap_ms = 0.0;
+  double fuse_octomap_ms = 0.0;  ///< handing the frame to the OctoMap's thread (waits if busy)
   double total_ms = 0.0;     ///< ProcessFrame as a whole (without load_ms)
 };
 
@@ -112,7 +113,8 @@ class Mapper {
   /// The chain (nullptr before the first frame).
   const PoseChain* chain() const { return chain_.get(); }
   const dem::ElevationMap& elevation_map() const { return elevation_map_; }
-  const dem::OctoMapFusion& octomap() const { return octomap_; }
+  /// The OctoMap, once every frame processed so far is in it (insertion runs on its own thread).
+  const dem::OctoMapFusion& octomap() const { return octomap_.Fusion(); }
   const io::Georeference& georeference() const { return georef_; }
   const io::SequenceInfo& sequence() const { return sequence_; }
   const PipelineOptions& options() const { return options_; }
@@ -136,7 +138,7 @@ class Mapper {
   io::Georeference georef_;
   std::unique_ptr<PoseChain> chain_;
   dem::ElevationMap elevation_map_;
-  dem::OctoMapFusion octomap_;
+  OctoMapWorker octomap_;
   // The registration reference: the last good frame (its index in the chain and its cloud),
   // or the local map of the last K good frames.
   std::optional<std::size_t> reference_index_;

@@ -1,0 +1,173 @@
+// bench_replay: the mapping pipeline as `rovermap replay` runs it, on simulated sequences.
+//
+//   bench_replay [--frames N] [--long N] [--kitti DIR] [--no-octomap]
+//
+// Table 1: frames per second and the per-stage medians on the default stereo traverse (480×360)
+// and on a cloud traverse (about 20k points a frame). Table 2: a long cloud traverse (default
+// 500 frames): per-frame cost and resident memory over its first and last tenth, so that growth
+// with the sequence's length shows. With --kitti DIR, also the real KITTI excerpt
+// (datasets/kitti_stereo51). Frames are read from disk, as replay does; outputs are not written.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench/BenchUtil.hpp"
+#include "config/Config.hpp"
+#include "io/Sequence.hpp"
+#include "mapper/Mapper.hpp"
+#include "sim/Simulator.hpp"
+
+namespace fs = std::filesystem;
+using namespace rovermap;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Resident set size now [MB] (/proc/self/statm: pages).
+double RssMb() {
+  std::ifstream in("/proc/self/statm");
+  long pages = 0, resident = 0;
+  in >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
+}
+
+struct FrameCost {
+  double total_ms = 0.0;  // load + process
+  double rss_mb = 0.0;    // after the frame
+  mapper::StageTimes stages;
+};
+
+// Replays `sequence` as replay does (read, then ProcessFrame), timing every frame.
+std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptions& options,
+                           double* wall_ms) {
+  io::SequenceReader reader(sequence);
+  mapper::Mapper mapper(reader.info(), options);
+  std::vector<FrameCost> costs;
+  const auto start = Clock::now();
+  io::Frame frame;
+  for (;;) {
+    const auto t0 = Clock::now();
+    if (!reader.Next(&frame)) break;
+    const double load_ms = MsSince(t0);
+    const mapper::FrameResult r = mapper.ProcessFrame(frame, load_ms);
+    costs.push_back({MsSince(t0), RssMb(), r.time});
+  }
+  *wall_ms = MsSince(start);
+  return costs;
+}
+
+template <typename F>
+double MedianOf(const std::vector<FrameCost>& costs, std::size_t from, std::size_t to, F&& f) {
+  std::vector<double> v;
+  for (std::size_t k = from; k < to && k < costs.size(); ++k) v.push_back(f(costs[k]));
+  return bench::Median(v);
+}
+
+void PrintRow(const std::string& name, const std::vector<FrameCost>& c, double wall_ms) {
+  const std::size_t n = c.size();
+  const auto median = [&](auto f) { return MedianOf(c, 1, n, f); };  // frame 0 registers nothing
+  std::printf("%-34s %6zu %7.2f %7.1f %7.1f %7.1f %8.1f %7.1f %8.1f %8.1f\n", name.c_str(), n,
+              1000.0 * static_cast<double>(n) / wall_ms,
+              median([](const FrameCost& f) { return f.stages.load_ms; }),
+              median([](const FrameCost& f) { return f.stages.stereo_ms; }),
+              median([](const FrameCost& f) { return f.stages.prepare_ms; }),
+              median([](const FrameCost& f) { return f.stages.register_ms; }),
+              median([](const FrameCost& f) { return f.stages.fuse_dem_ms; }),
+              median([](const FrameCost& f) { return f.stages.fuse_octomap_ms; }),
+              median([](const FrameCost& f) { return f.total_ms; }));
+}
+
+fs::path Simulate(const fs::path& dir, const sim::SimOptions& o) {
+  sim::Simulator(o).WriteSequence(dir, {});
+  return dir;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 30;
+  int long_frames = 500;
+  std::string kitti;
+  bool octomap = true;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (arg == "--frames") frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--long") long_frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--kitti") kitti = bench::OptionValue(argc, argv, &i);
+      else if (arg == "--no-octomap") octomap = false;
+      else throw std::invalid_argument("unknown option " + arg);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_replay: %s\nusage: bench_replay [--frames N] [--long N] "
+                         "[--kitti DIR] [--no-octomap]\n", e.what());
+    return 2;
+  }
+  const config::Config defaults;
+  mapper::PipelineOptions options{defaults.mapper, defaults.registration, defaults.stereo,
+                                  defaults.dem, defaults.octomap};
+  options.octomap.enabled = octomap;
+  const fs::path scratch = fs::temp_directory_path() / ("rovermap_bench_replay." +
+                                                        std::to_string(getpid()));
+  fs::create_directories(scratch);
+  std::printf("# bench_replay: defaults, OctoMap %s; load average %s\n", octomap ? "on" : "off",
+              bench::LoadAverage().c_str());
+  std::printf("# per-frame medians [ms], frame 0 excluded; fps = frames / wall time (reading "
+              "included)\n");
+  std::printf("%-34s %6s %7s %7s %7s %7s %8s %7s %8s %8s\n", "sequence", "frames", "fps", "load",
+              "stereo", "prep", "register", "dem", "octomap", "frame");
+
+  sim::SimOptions stereo;
+  stereo.frames = frames;
+  double wall = 0.0;
+  auto costs = Run(Simulate(scratch / "stereo", stereo), options, &wall);
+  PrintRow("sim stereo 480x360", costs, wall);
+
+  sim::SimOptions cloud = stereo;
+  cloud.sensor = sim::SensorKind::kCloud;
+  cloud.cloud_stride_px = 3;  // about 19k points a frame
+  costs = Run(Simulate(scratch / "cloud", cloud), options, &wall);
+  PrintRow("sim cloud (stride 3)", costs, wall);
+
+  if (!kitti.empty()) {
+    costs = Run(kitti, options, &wall);
+    PrintRow("KITTI stereo 1226x370", costs, wall);
+  }
+
+  // A long traverse: does a frame cost more, or the process hold more, as the sequence grows?
+  sim::SimOptions longer = cloud;
+  longer.frames = long_frames;
+  longer.path = sim::PathShape::kLoop;
+  longer.terrain_size_m = 60.0;
+  costs = Run(Simulate(scratch / "long", longer), options, &wall);
+  PrintRow("sim cloud, " + std::to_string(long_frames) + " frames (loop)", costs, wall);
+  const std::size_t n = costs.size(), tenth = std::max<std::size_t>(1, n / 10);
+  const auto frame_ms = [](const FrameCost& f) { return f.total_ms; };
+  std::printf("\n%-34s %12s %12s\n", "long cloud traverse", "first 10 %", "last 10 %");
+  std::printf("%-34s %12.1f %12.1f\n", "frame [ms], median", MedianOf(costs, 1, tenth, frame_ms),
+              MedianOf(costs, n - tenth, n, frame_ms));
+  const auto stage = [&](const char* name, double mapper::StageTimes::*field) {
+    const auto f = [field](const FrameCost& c) { return c.stages.*field; };
+    std::printf("%-34s %12.1f %12.1f\n", name, MedianOf(costs, 1, tenth, f),
+                MedianOf(costs, n - tenth, n, f));
+  };
+  stage("  register [ms]", &mapper::StageTimes::register_ms);
+  stage("  prepare [ms]", &mapper::StageTimes::prepare_ms);
+  stage("  fuse DEM [ms]", &mapper::StageTimes::fuse_dem_ms);
+  stage("  hand to the OctoMap [ms]", &mapper::StageTimes::fuse_octomap_ms);
+  std::printf("%-34s %12.1f %12.1f\n", "resident memory [MB], at the end", costs[tenth - 1].rss_mb,
+              costs.back().rss_mb);
+  std::printf("# load average after: %s\n", bench::LoadAverage().c_str());
+  fs::remove_all(scratch);
+  return 0;
+}

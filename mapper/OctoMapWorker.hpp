@@ -1,0 +1,51 @@
+#pragma once
+// The OctoMap's insertion on a thread of its own. octomap::OcTree inserts single-threaded and
+// is independent of the next frame's registration, so the two overlap; one frame at most waits,
+// so memory stays flat, and frames go in order, so the tree equals a serial one.
+
+#include <Eigen/Core>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "dem/OctoMapFusion.hpp"
+
+namespace rovermap::mapper {
+
+class OctoMapWorker {
+ public:
+  /// @throw std::invalid_argument if `options` are invalid (dem::OctoMapFusion).
+  explicit OctoMapWorker(const dem::OctoMapOptions& options);
+  ~OctoMapWorker();
+  OctoMapWorker(const OctoMapWorker&) = delete;
+  OctoMapWorker& operator=(const OctoMapWorker&) = delete;
+
+  /// Queues one frame's world points seen from `sensor_origin_world`; waits first while an
+  /// earlier frame is still queued (not while it is being inserted). Never throws.
+  void Insert(std::vector<Eigen::Vector3d> points_world, const Eigen::Vector3d& sensor_origin_world);
+
+  /// Waits until every queued frame is in the tree, then gives the map (for writing).
+  const dem::OctoMapFusion& Fusion() const;
+
+  /// Milliseconds the last finished insertion took (for the report).
+  double last_insert_ms() const;
+
+ private:
+  void Loop();
+  struct Job {
+    std::vector<Eigen::Vector3d> points;
+    Eigen::Vector3d origin;
+  };
+  dem::OctoMapFusion fusion_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  std::optional<Job> queued_;
+  bool busy_ = false;
+  bool stop_ = false;
+  double last_insert_ms_ = 0.0;
+  std::thread thread_;  // last: started once the members above exist
+};
+
+}  // namespace rovermap::mapper
