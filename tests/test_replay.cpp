@@ -278,6 +278,22 @@ TEST_F(Replay, CorruptedFramesAreSkippedAndReported) {
   EXPECT_EQ(rovermap::io::ReadTum(out / "trajectory.tum").size(), 5u);
 }
 
+TEST_F(Replay, TruncatedImageIsABadFrame) {
+  const fs::path seq = CopySequence(kTinyStereo, "truncated_png");
+  const std::string png = Slurp(seq / "frames/000001.right.png");
+  std::ofstream(seq / "frames/000001.right.png", std::ios::binary) << png.substr(0, png.size() / 3);
+  const fs::path out = dir_ / "out";
+  const nlohmann::json summary = Run(seq, out);
+  EXPECT_EQ(summary["frames"], 3);
+  EXPECT_EQ(summary["bad_frames"], 1);
+  const auto rows = ReadCsv(out / "drift.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[1].at("status"), "bad_frame");
+  EXPECT_NE(rows[1].at("detail").find("000001.right.png"), std::string::npos)
+      << rows[1].at("detail");
+  EXPECT_NE(rows[2].at("status"), "bad_frame");
+}
+
 TEST_F(Replay, IsDeterministic) {
   const nlohmann::json a = Run(kTinyCloud, dir_ / "a");
   const nlohmann::json b = Run(kTinyCloud, dir_ / "b");
