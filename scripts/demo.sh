@@ -30,5 +30,5 @@ result="$out/register_bun045_bun000.json"
 "$bin" register "$data/stanford_bunny/bun045.ply" "$data/stanford_bunny/bun000.ply" \
   --init "$init" --preview "$out/register_bun045_bun000.png" > "$result.tmp"
 mv "$result.tmp" "$result"
-grep -E '"(status|iterations|rms|time_ms)"' "$result" | tr -d ' ,' | sed 's/^/     /'
+grep -E '^  "(status|iterations|rms|time_ms)"' "$result" | tr -d ' ,' | sed 's/^/     /'
 echo "   full result: $result; picture: $out/register_bun045_bun000.png"
