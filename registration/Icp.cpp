@@ -416,6 +416,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   std::vector<double> previous_distances;
   std::size_t previous_queries = 0, previous_step = 0;
 
+  constexpr std::size_t kCycleMemory = 8;  // iterates a cycle may span (see the stopping test)
+  std::vector<Eigen::Isometry3d> recent;
   for (int it = 1; it <= options.max_iterations; ++it) {
     const bool coarse = options.coarse_to_fine && it <= options.coarse_iterations;
     const std::size_t step = coarse ? static_cast<std::size_t>(options.coarse_step) : 1;
@@ -540,10 +542,25 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
             ? RelativeConverged(T, T_new, options.relative_tolerance, d_ref * 1e-4)
             : trace.step_translation_m < translation_tol &&
                   trace.step_rotation_deg < options.rotation_tolerance_deg;
+    // A cycle: the pairs flip between a few sets and the plain iterate comes back to within the
+    // stopping tolerances of one of the last few (seen on stereo frames: period 2 to 7, steps of
+    // 0.005° that never went below the rotation tolerance, so every such frame ran to
+    // max_iterations). The estimate cannot get better than that; stop.
+    bool cycling = false;
+    if (options.convergence == Convergence::kAbsolute && !small_step) {
+      for (const Eigen::Isometry3d& earlier : recent) {
+        cycling |= (T_new.translation() - earlier.translation()).norm() < translation_tol &&
+                   Eigen::AngleAxisd(T_new.linear() * earlier.linear().transpose()).angle() *
+                           kRadToDeg <
+                       options.rotation_tolerance_deg;
+      }
+    }
+    if (recent.size() == kCycleMemory) recent.erase(recent.begin());
+    recent.push_back(T);  // the iterate before this one: comparing with it is the step test
     T = T_new;
     result.iterations = it;
     // In the coarse stage a small step only means the subset has settled: go on to all points.
-    if (small_step && !coarse) {
+    if ((small_step || cycling) && !coarse) {
       result.status = RegistrationStatus::kConverged;
       break;
     }

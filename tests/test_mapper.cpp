@@ -93,6 +93,7 @@ fs::path Simulate(const sim::SimOptions& o, const std::string& name, sim::Simula
 struct Traverse {
   double drift_ratio = 0.0;  ///< registered ATE origin / dead reckoning's
   DemErrors dem;
+  std::size_t ran_to_max_iterations = 0;  ///< frames whose matcher never stopped
 };
 
 Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
@@ -102,6 +103,7 @@ Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
   const auto& odo = run.drift.odometry;
   Traverse t;
   t.drift_ratio = reg.ate_origin_m.rmse / odo.ate_origin_m.rmse;
+  for (const auto& r : run.mapper->results()) t.ran_to_max_iterations += r.matcher_status == "max_iterations";
   t.dem = Compare(run.mapper->elevation_map(),
                   [&](double x, double y) { return simulator->terrain().Height(x, y); });
   std::printf("%s: ATE origin registered %.4f m, dead reckoning %.4f m; DEM %zu cells, RMSE %.4f m, "
@@ -120,6 +122,9 @@ TEST(Mapper, SimulatedCloudTraverse) {
   // reckoning's roll and pitch are exact, so every change registration makes to them, however
   // small, tilts the far end of the map; the DEM error grows away from the start.)
   EXPECT_LT(t.drift_ratio, 0.25);
+  // Before the matcher stopped on cycles, 3 of these frames ran to 100 iterations (a period-2
+  // cycle of 0.005° steps, above the 0.001° rotation tolerance).
+  EXPECT_EQ(t.ran_to_max_iterations, 0u);
   EXPECT_GT(t.dem.cells, 10000u);
   EXPECT_LT(t.dem.rmse_m, 0.035);
   EXPECT_LT(t.dem.p95_m, 0.075);
