@@ -1,7 +1,10 @@
 #pragma once
 // Small helpers shared by the benchmark harnesses.
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -35,6 +38,16 @@ inline int ParseRuns(const std::string& text) {
   const int runs = std::stoi(text);
   if (runs < 1) throw std::invalid_argument("--runs must be at least 1");
   return runs;
+}
+
+/// As the rovermap command does (apps/main.cpp): OpenMP waits passively unless the environment
+/// says otherwise (OMP_WAIT_POLICY is read at start-up, so the process re-executes itself once
+/// with it set). Call first thing in main.
+inline void WaitPassivelyUnlessTold(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
+    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+    ::execv("/proc/self/exe", argv);
+  }
 }
 
 }  // namespace rovermap::bench

@@ -1,6 +1,6 @@
 #pragma once
-// Peer ICP implementations (PCL, Open3D) for bench_register, compiled only with
-// -DROVERMAP_BENCH_PEERS=ON. Each peer gets the clouds in its own format, converted before
+// Peer ICP implementations (PCL, Open3D) for bench_register and bench_drift, compiled only
+// with -DROVERMAP_BENCH_PEERS=ON. Each peer gets the clouds in its own format, converted before
 // the timer starts (as rovermap gets its PointCloud), and times everything from there to
 // the result: tree building, normal estimation (point-to-plane), the ICP loop.
 
@@ -16,6 +16,7 @@ namespace rovermap::bench {
 struct PeerParams {
   double max_correspondence_m = 0.0;  ///< fixed correspondence gate [m]
   int max_iterations = 100;
+  int normals_knn = 10;  ///< Open3D point-to-plane: neighbours of the target's normal estimate
 };
 
 struct PeerResult {
@@ -23,6 +24,7 @@ struct PeerResult {
   double time_ms = 0.0;  ///< timed region only
   int iterations = -1;   ///< -1: not reported by this run (see CountIterations)
   std::string status;    ///< the peer's own convergence state, short
+  double fitness = -1.0;  ///< Open3D: share of source points with a pair at the end (-1: n/a)
 };
 
 /// One peer method bound to one pair of clouds (converted once, reused for every run).
@@ -45,9 +47,14 @@ std::unique_ptr<PeerMethod> MakePclIcp(const Points& source, const Points& targe
 /// Open3D 0.16 RegistrationICP, point-to-point (OpenMP).
 std::unique_ptr<PeerMethod> MakeOpen3dPointToPoint(const Points& source, const Points& target);
 
-/// Open3D 0.16 RegistrationICP, point-to-plane; target normals estimated (KNN 10) inside the
-/// timed region.
+/// Open3D 0.16 RegistrationICP, point-to-plane; target normals estimated (KNN
+/// PeerParams::normals_knn) inside the timed region.
 std::unique_ptr<PeerMethod> MakeOpen3dPointToPlane(const Points& source, const Points& target);
+
+/// Open3D 0.16 RegistrationGeneralizedICP (Segal et al. 2009) with its defaults (ε = 1e-3,
+/// L2 loss): both clouds' covariances estimated by Open3D from their 20 nearest neighbours
+/// inside the timed region, as the call does for clouds without normals or covariances.
+std::unique_ptr<PeerMethod> MakeOpen3dGeneralizedIcp(const Points& source, const Points& target);
 
 /// Library versions for the report header.
 std::string PclVersion();

@@ -10,7 +10,6 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -96,11 +95,7 @@ fs::path Simulate(const fs::path& dir, const sim::SimOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // As the rovermap command does (apps/main.cpp): OpenMP waits passively unless told otherwise.
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
-    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
-    ::execv("/proc/self/exe", argv);
-  }
+  bench::WaitPassivelyUnlessTold(argv);
   int frames = 30;
   int long_frames = 500;
   std::string kitti;

@@ -94,14 +94,7 @@ FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, do
     bad.dropped_nonfinite = loaded.dropped_nonfinite;
     return bad;
   }
-  FrameResult r;
-  r.index = frame.index;
-  r.timestamp = frame.timestamp;
-  r.T_world_body_truth = frame.T_world_body_truth;
-  r.points = loaded.cloud.size();
-  r.dropped_nonfinite = loaded.dropped_nonfinite;
-  r.time.load_ms = load_ms;
-  r.time.stereo_ms = loaded.stereo_ms;
+  FrameResult r = Begin(frame, loaded, load_ms);
 
   // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones (§9a).
   auto prepare_start = Clock::now();
@@ -115,38 +108,55 @@ FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, do
 
   // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction.
   const auto register_start = Clock::now();
-  Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
+  const Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
   r.time.register_ms = MsSince(register_start);
 
   // 6. Chain the accepted increment (or dead reckoning's).
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
-  if (reg.T_world_body && r.step.fallback) {  // PoseChain refused it: not a finite rigid motion
-    reg.status = FrameStatus::kFallback;
-    reg.reason = FallbackReason::kRegistrationFailed;
-    reg.detail = "registered increment is not a finite rigid transform";
-  }
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
 
   // 8. Report; this frame becomes the next one's reference.
-  r.status = reg.status;
-  r.fallback_reason = reg.reason;
-  r.detail = reg.detail;
-  r.odometry_directions = reg.odometry_directions;
-  if (reg.matcher) {
-    r.matcher_status = registration::ToString(reg.matcher->status);
-    r.iterations = reg.matcher->iterations;
-    r.inliers = reg.matcher->inliers;
-    r.inlier_ratio = reg.matcher->inlier_ratio;
-    r.rms_m = reg.matcher->rms_m;
-    r.conditioning = reg.matcher->conditioning;
-  }
+  Report(reg, &r);
   KeepAsReference(std::move(source), r.step,
                   reg.matcher ? reg.matcher->reference_distance_m : last_reference_distance_m_);
   r.time.total_ms = loaded.stereo_ms + MsSince(start);
   results_.push_back(r);
   return r;
+}
+
+FrameResult Mapper::Begin(const io::Frame& frame, const LoadedFrame& loaded, double load_ms) {
+  FrameResult r;
+  r.index = frame.index;
+  r.timestamp = frame.timestamp;
+  r.T_world_body_truth = frame.T_world_body_truth;
+  r.points = loaded.cloud.size();
+  r.dropped_nonfinite = loaded.dropped_nonfinite;
+  r.time.load_ms = load_ms;
+  r.time.stereo_ms = loaded.stereo_ms;
+  return r;
+}
+
+void Mapper::Report(const Registered& reg, FrameResult* r) {
+  r->status = reg.status;
+  r->fallback_reason = reg.reason;
+  r->detail = reg.detail;
+  r->odometry_directions = reg.odometry_directions;
+  if (reg.T_world_body && r->step.fallback) {  // PoseChain refused it: not a finite rigid motion
+    r->status = FrameStatus::kFallback;
+    r->fallback_reason = FallbackReason::kRegistrationFailed;
+    r->detail = "registered increment is not a finite rigid transform";
+    r->odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
+  }
+  if (reg.matcher) {
+    r->matcher_status = registration::ToString(reg.matcher->status);
+    r->iterations = reg.matcher->iterations;
+    r->inliers = reg.matcher->inliers;
+    r->inlier_ratio = reg.matcher->inlier_ratio;
+    r->rms_m = reg.matcher->rms_m;
+    r->conditioning = reg.matcher->conditioning;
+  }
 }
 
 FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,

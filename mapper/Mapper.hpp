@@ -122,6 +122,8 @@ class Mapper {
 
  private:
   struct Registered;  // the outcome of register + judge + blend
+  static FrameResult Begin(const io::Frame& frame, const LoadedFrame& loaded, double load_ms);
+  static void Report(const Registered& reg, FrameResult* result);
   Registered RegisterOntoReference(const registration::IndexedCloud& source,
                                    const Eigen::Isometry3d& T_world_body_odom);
   ChainStep Chain(const io::Frame& frame, const std::optional<Eigen::Isometry3d>& T_world_body,
