@@ -254,6 +254,10 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "odometry rotation sigma per metre of step");
   map.Double("odometry_sigma_rotation_deg", &P::odometry_sigma_rotation_deg, "deg", AtLeast(0),
              "odometry rotation sigma per step (floor)");
+  map.Double("odometry_attitude_sigma_deg", &P::odometry_attitude_sigma_deg, "deg", AtLeast(0),
+             "dead reckoning's roll and pitch as absolute, this sigma; 0 = chain alone");
+  map.Double("registration_attitude_sigma_deg", &P::registration_attitude_sigma_deg, "deg",
+             AtLeast(0), "roll and pitch uncertainty a registered increment adds");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
 

@@ -70,6 +70,8 @@ Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
       options_(options),
       sensor_(MakeSensor(sequence, options.stereo)),
       georef_(MakeGeoreference(sequence)),
+      attitude_(options.mapper.odometry_attitude_sigma_deg,
+                options.mapper.registration_attitude_sigma_deg),
       elevation_map_(GridAlongProjection(options.dem, georef_)),
       octomap_(options.octomap),
       local_map_(static_cast<std::size_t>(std::max(1, options.mapper.local_map_frames))) {
@@ -257,7 +259,10 @@ ChainStep Mapper::Chain(const io::Frame& frame,
     const Eigen::Isometry3d odometry = chain_->PredictIncrement(frame.T_world_body_odom);
     return chain_->Add(frame.T_world_body_odom, std::nullopt, OdometryCovariance(odometry));
   }
-  Eigen::Isometry3d increment = chain_->back().T_world_body.inverse() * *T_world_body;
+  // Roll and pitch pulled towards dead reckoning's absolute ones (AttitudePrior).
+  const Eigen::Isometry3d T_world_body_prior =
+      attitude_.Update(*T_world_body, frame.T_world_body_odom);
+  Eigen::Isometry3d increment = chain_->back().T_world_body.inverse() * T_world_body_prior;
   // Products of many small rotations drift off orthogonality (the matcher's iterates, the
   // chain); PoseChain takes only proper rotations, so project onto the nearest one.
   increment.linear() = Eigen::Quaterniond(increment.linear()).normalized().toRotationMatrix();

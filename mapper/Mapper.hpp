@@ -15,6 +15,7 @@
 #include "dem/OctoMapOptions.hpp"
 #include "io/Georeference.hpp"
 #include "io/Sequence.hpp"
+#include "mapper/AttitudePrior.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/FrameLoader.hpp"
 #include "mapper/LocalMap.hpp"
@@ -139,6 +140,7 @@ class Mapper {
   SensorSetup sensor_;
   io::Georeference georef_;
   std::unique_ptr<PoseChain> chain_;
+  AttitudePrior attitude_;
   dem::ElevationMap elevation_map_;
   OctoMapWorker octomap_;
   // The registration reference: the last good frame (its index in the chain and its cloud),

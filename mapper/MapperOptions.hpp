@@ -45,6 +45,14 @@ struct MapperOptions {
   double odometry_sigma_rotation_deg_per_m = 2.0;  ///< [deg/m] of the step length
   double odometry_sigma_rotation_deg = 0.5;        ///< [deg] per step, floor
 
+  /// Dead reckoning's roll and pitch as an absolute measurement (IMU, inclinometers), σ [deg];
+  /// 0 = roll and pitch from the chain alone (they drift: see AttitudePrior). Off by default:
+  /// on KITTI (0.2°) it removed the 1.6° roll drift but the registered steps' own tilt then
+  /// drove the height 0.6 m off (README, "Known limits").
+  double odometry_attitude_sigma_deg = 0.0;
+  /// Roll and pitch uncertainty one registered increment adds to the chain [deg].
+  double registration_attitude_sigma_deg = 0.05;
+
   /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
   /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.
