@@ -21,9 +21,9 @@ struct PeerParams {
 
 struct PeerResult {
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
-  double time_ms = 0.0;  ///< timed region only
-  int iterations = -1;   ///< -1: not reported by this run (see CountIterations)
-  std::string status;    ///< the peer's own convergence state, short
+  double time_ms = 0.0;   ///< timed region only
+  int iterations = -1;    ///< -1: not reported by this run (see CountIterations)
+  std::string status;     ///< the peer's own convergence state, short
   double fitness = -1.0;  ///< Open3D: share of source points with a pair at the end (-1: n/a)
 };
 

@@ -8,12 +8,14 @@
 //
 // One table per sequence: ATE aligned at the first pose, ATE (SE(3)-aligned), final position
 // error in % of the true path length, median time per frame, and how often a method's
-// increment came out worse than dead reckoning's; then the ratios the target asks for.
+// increment came out worse than dead reckoning's; then the ratios the target asks for. Each
+// method runs --repeats times (default 3): the run with the median ATE is reported, with the
+// range over the runs.
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -112,8 +114,8 @@ Run RunRovermap(const Sequence& seq, mapper::Reference reference, bool own_norma
     const double whole_ms = MsSince(t0);
     run.poses.push_back(r.step.T_world_body);
     if (frame.index == 0) continue;
-    const bool partial_yaw = r.status == mapper::FrameStatus::kPartial &&
-                             (r.odometry_directions & mapper::kYaw) != 0;
+    const bool partial_yaw =
+        r.status == mapper::FrameStatus::kPartial && (r.odometry_directions & mapper::kYaw) != 0;
     if (partial_yaw || r.status == mapper::FrameStatus::kFallback ||
         r.status == mapper::FrameStatus::kBadFrame) {
       ++run.yaw_from_odometry;
@@ -164,8 +166,8 @@ struct StepErrors {
 StepErrors IncrementErrors(const Poses& est, const Poses& truth) {
   StepErrors out;
   for (std::size_t k = 1; k < est.size(); ++k) {
-    const Eigen::Isometry3d e = (est[k - 1].inverse() * est[k]).inverse() *
-                                (truth[k - 1].inverse() * truth[k]);
+    const Eigen::Isometry3d e =
+        (est[k - 1].inverse() * est[k]).inverse() * (truth[k - 1].inverse() * truth[k]);
     out.m.push_back(e.translation().norm());
     out.deg.push_back(eval::RotationAngle(e) * 180.0 / M_PI);
   }
@@ -190,8 +192,8 @@ Row Evaluate(const Run& run, const Sequence& seq) {
   row.yaw_from_odometry = run.yaw_from_odometry;
   row.ate_origin_m = row.ate_origin_min_m = row.ate_origin_max_m = m.ate_origin_m.rmse;
   row.ate_m = m.ate_m.rmse;
-  row.final_percent = 100.0 * (run.poses.back().translation() - seq.truth.back().translation())
-                                  .norm() / m.length_m;
+  row.final_percent =
+      100.0 * (run.poses.back().translation() - seq.truth.back().translation()).norm() / m.length_m;
   if (!run.register_ms.empty()) row.register_ms = bench::Median(run.register_ms);
   if (!run.frame_ms.empty()) row.frame_ms = bench::Median(run.frame_ms);
   const StepErrors errors = IncrementErrors(run.poses, seq.truth);
@@ -201,14 +203,14 @@ Row Evaluate(const Run& run, const Sequence& seq) {
     row.worst_step_m = std::max(row.worst_step_m, errors.m[k]);
     row.worst_step_deg = std::max(row.worst_step_deg, errors.deg[k]);
   }
-  for (const double f : run.fitness) row.min_fitness = std::isnan(row.min_fitness) ? f
-                                                         : std::min(row.min_fitness, f);
+  for (const double f : run.fitness)
+    row.min_fitness = std::isnan(row.min_fitness) ? f : std::min(row.min_fitness, f);
   return row;
 }
 
-// `repeats` runs of one method (OpenMP's reductions make rovermap's runs differ slightly, and
-// chaining amplifies that): the row of the run with the median ATE origin, the range of ATE
-// origin over the runs, and the median time per frame over every run's frames.
+// `repeats` runs of one method (should a parallel reduction ever make runs differ, chaining
+// would amplify it): the row of the run with the median ATE origin, the range of ATE origin
+// over the runs, and the median time per frame over every run's frames.
 Row Measure(const std::function<Run()>& run_once, const Sequence& seq, int repeats,
             const fs::path& dump) {
   std::vector<Run> runs;
@@ -247,19 +249,21 @@ void Report(const Sequence& seq, const std::vector<Row>& rows, std::size_t steps
               "ATEo range", "ATE[cm]", "final[%]", "reg[ms]", "frame[ms]", "worse", "max[cm]",
               "max[deg]", "min fit", "yaw DR");
   for (const Row& r : rows) {
-    std::printf("%-32s %8.2f %5.2f-%-5.2f %7.2f %8.3f %8.1f %9.1f %3d/%-3zu %7.2f %8.3f %7.3f %6d\n",
-                r.name.c_str(), 100 * r.ate_origin_m, 100 * r.ate_origin_min_m,
-                100 * r.ate_origin_max_m, 100 * r.ate_m, r.final_percent, r.register_ms,
-                r.frame_ms, r.worse_steps, steps, 100 * r.worst_step_m, r.worst_step_deg,
-                r.min_fitness, r.yaw_from_odometry);
+    const std::string yaw = r.yaw_from_odometry < 0 ? "-" : std::to_string(r.yaw_from_odometry);
+    std::printf(
+        "%-32s %8.2f %5.2f-%-5.2f %7.2f %8.3f %8.1f %9.1f %3d/%-3zu %7.2f %8.3f %7.3f "
+        "%6s\n",
+        r.name.c_str(), 100 * r.ate_origin_m, 100 * r.ate_origin_min_m, 100 * r.ate_origin_max_m,
+        100 * r.ate_m, r.final_percent, r.register_ms, r.frame_ms, r.worse_steps, steps,
+        100 * r.worst_step_m, r.worst_step_deg, r.min_fitness, yaw.c_str());
   }
   const Row& odometry = rows[0];
   const Row& gicp = rows[2];
   for (std::size_t i = 3; i < rows.size(); ++i) {
     std::printf("%s against %s:\n", rows[i].name.c_str(), gicp.name.c_str());
     PrintRatio("ATE origin / GICP's", rows[i].ate_origin_m / gicp.ate_origin_m, 1.0);
-    PrintRatio("time per frame (prepare+register) / GICP's",
-               rows[i].register_ms / gicp.register_ms, 0.5);
+    PrintRatio("time per frame (prepare+register) / GICP's", rows[i].register_ms / gicp.register_ms,
+               0.5);
     PrintRatio("ATE origin / dead reckoning's", rows[i].ate_origin_m / odometry.ate_origin_m, 0.1);
   }
 }
@@ -278,20 +282,29 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
-      if (arg == "--frames") frames = std::stoi(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--long") long_frames = std::stoi(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--gate-factor") gate_factor = std::stod(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--gate-m") gate_m = std::stod(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--repeats") repeats = bench::ParseRuns(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--dump") dump = bench::OptionValue(argc, argv, &i);
+      if (arg == "--frames")
+        frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--long")
+        long_frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--gate-factor")
+        gate_factor = std::stod(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--gate-m")
+        gate_m = std::stod(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--repeats")
+        repeats = std::max(1, std::stoi(bench::OptionValue(argc, argv, &i)));
+      else if (arg == "--dump")
+        dump = bench::OptionValue(argc, argv, &i);
       else if (arg == "--max-iterations")
         params.max_iterations = std::stoi(bench::OptionValue(argc, argv, &i));
-      else throw std::invalid_argument("unknown option " + arg);
+      else
+        throw std::invalid_argument("unknown option " + arg);
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_drift: %s\nusage: bench_drift [--frames N] [--long N] "
-                         "[--gate-factor F | --gate-m M] [--max-iterations N] [--repeats N] "
-                         "[--dump DIR]\n", e.what());
+    std::fprintf(stderr,
+                 "bench_drift: %s\nusage: bench_drift [--frames N] [--long N] "
+                 "[--gate-factor F | --gate-m M] [--max-iterations N] [--repeats N] "
+                 "[--dump DIR]\n",
+                 e.what());
     return 2;
   }
   const fs::path scratch =
@@ -299,12 +312,13 @@ int main(int argc, char** argv) {
   fs::create_directories(scratch);
   std::printf("# bench_drift: Open3D %s; load average %s\n", bench::Open3dVersion().c_str(),
               bench::LoadAverage().c_str());
-  std::printf("# ATEo: ATE aligned at the first pose; final: |t_last - t_true,last| / true path "
-              "length; reg: median per frame of rovermap's prepare+register stages or the peer's "
-              "call (normals/covariances, tree, ICP); frame: LoadFrame + ProcessLoaded; worse: "
-              "increments (translation) further from the truth than dead reckoning's; max: "
-              "largest increment error; min fit: Open3D's smallest fitness; yaw DR: rovermap's "
-              "increments whose yaw is dead reckoning's (degenerate direction or fallback)\n");
+  std::printf(
+      "# ATEo: ATE aligned at the first pose; final: |t_last - t_true,last| / true path "
+      "length; reg: median per frame of rovermap's prepare+register stages or the peer's "
+      "call (normals/covariances, tree, ICP); frame: LoadFrame + ProcessLoaded; worse: "
+      "increments (translation) further from the truth than dead reckoning's; max: "
+      "largest increment error; min fit: Open3D's smallest fitness; yaw DR: rovermap's "
+      "increments whose yaw is dead reckoning's (degenerate direction or fallback)\n");
 
   sim::SimOptions traverse;
   traverse.sensor = sim::SensorKind::kCloud;
@@ -326,10 +340,11 @@ int main(int argc, char** argv) {
     const config::Config defaults;
     const registration::IndexedCloud cloud0(first.cloud, defaults.registration);
     params.max_correspondence_m = gate_m ? *gate_m : gate_factor * cloud0.spacing();
-    std::printf("\n# %s: %zu points in frame 0, median spacing %.3f m; peers: gate %.3f m, at "
-                "most %d iterations, point-to-plane normals from %d neighbours\n",
-                seq.name.c_str(), first.cloud.size(), cloud0.spacing(),
-                params.max_correspondence_m, params.max_iterations, params.normals_knn);
+    std::printf(
+        "\n# %s: %zu points in frame 0, median spacing %.3f m; peers: gate %.3f m, at "
+        "most %d iterations, point-to-plane normals from %d neighbours\n",
+        seq.name.c_str(), first.cloud.size(), cloud0.spacing(), params.max_correspondence_m,
+        params.max_iterations, params.normals_knn);
     std::fflush(stdout);
 
     Run odometry;
@@ -337,13 +352,14 @@ int main(int argc, char** argv) {
     odometry.poses = seq.odometry;
     Dump(dump, seq, "groundtruth", seq.truth);
     std::vector<Row> rows = {Measure([&] { return odometry; }, seq, 1, dump)};
-    for (const PeerFactory make : {&bench::MakeOpen3dPointToPlane, &bench::MakeOpen3dGeneralizedIcp}) {
+    for (const PeerFactory make :
+         {&bench::MakeOpen3dPointToPlane, &bench::MakeOpen3dGeneralizedIcp}) {
       rows.push_back(Measure([&] { return RunPeer(seq, make, params); }, seq, repeats, dump));
     }
     for (const auto reference : {mapper::Reference::kPrevious, mapper::Reference::kLocalMap}) {
       for (const bool own_normals : {false, true}) {
-        rows.push_back(Measure([&] { return RunRovermap(seq, reference, own_normals); }, seq,
-                               repeats, dump));
+        rows.push_back(
+            Measure([&] { return RunRovermap(seq, reference, own_normals); }, seq, repeats, dump));
       }
     }
     Report(seq, rows, seq.truth.size() - 1);
