@@ -75,7 +75,8 @@ void CheckOutputDirectory(const std::filesystem::path& out, bool force) {
   namespace fs = std::filesystem;
   std::error_code error;
   if (!fs::exists(out, error)) return;
-  if (!fs::is_directory(out, error)) throw UsageError("--out " + out.string() + ": not a directory");
+  if (!fs::is_directory(out, error))
+    throw UsageError("--out " + out.string() + ": not a directory");
   if (!force && !fs::is_empty(out, error)) {
     throw UsageError("--out " + out.string() +
                      ": directory is not empty (use --force to overwrite its outputs)");

@@ -22,7 +22,8 @@ Vector6d LeftDifference(const Eigen::Isometry3d& T_registered,
 Eigen::Isometry3d ApplyLeft(const Vector6d& delta, const Eigen::Isometry3d& T) {
   Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
   const double angle = delta.head<3>().norm();
-  if (angle > 0.0) D.linear() = Eigen::AngleAxisd(angle, delta.head<3>() / angle).toRotationMatrix();
+  if (angle > 0.0)
+    D.linear() = Eigen::AngleAxisd(angle, delta.head<3>() / angle).toRotationMatrix();
   D.translation() = delta.tail<3>();
   return D * T;
 }
@@ -41,9 +42,9 @@ std::string DirectionNames(unsigned mask) {
 }
 
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
-                                const Eigen::Isometry3d& T_registered,
-                                const Matrix6d& information, double extent_m,
-                                double min_information, const Matrix6d& odometry_covariance) {
+                                const Eigen::Isometry3d& T_registered, const Matrix6d& information,
+                                double extent_m, double min_information,
+                                const Matrix6d& odometry_covariance) {
   BlendedIncrement out;
   // Scaled coordinates δs = S⁻¹δ with S = diag(1/extent ×3, 1 ×3): rotations in metres of arc.
   Vector6d s = Vector6d::Ones();
@@ -87,8 +88,8 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   out.T = ApplyLeft(delta, T_predicted);
 
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
-  const Matrix6d unconstrained = s.asDiagonal() * (Matrix6d::Identity() - projector_scaled) *
-                                 s.cwiseInverse().asDiagonal();
+  const Matrix6d unconstrained =
+      s.asDiagonal() * (Matrix6d::Identity() - projector_scaled) * s.cwiseInverse().asDiagonal();
   out.covariance = s.asDiagonal() * covariance_scaled * s.asDiagonal() +
                    unconstrained * odometry_covariance * unconstrained.transpose();
   return out;

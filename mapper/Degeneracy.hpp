@@ -47,8 +47,8 @@ struct BlendedIncrement {
 /// min_information <= 0 keeps the registration whole. A zero information keeps the prediction
 /// whole. Never throws.
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
-                                const Eigen::Isometry3d& T_registered,
-                                const Matrix6d& information, double extent_m,
-                                double min_information, const Matrix6d& odometry_covariance);
+                                const Eigen::Isometry3d& T_registered, const Matrix6d& information,
+                                double extent_m, double min_information,
+                                const Matrix6d& odometry_covariance);
 
 }  // namespace rovermap::mapper

@@ -36,8 +36,8 @@ std::string Quoted(const std::string& text) {
 
 void AppendComponents(std::ostringstream& s, const Eigen::Isometry3d& T) {
   const TransformComponents c = CorrectionComponents(T);
-  s << ',' << c.dx_m << ',' << c.dy_m << ',' << c.dz_m << ',' << c.droll_deg << ','
-    << c.dpitch_deg << ',' << c.dyaw_deg;
+  s << ',' << c.dx_m << ',' << c.dy_m << ',' << c.dz_m << ',' << c.droll_deg << ',' << c.dpitch_deg
+    << ',' << c.dyaw_deg;
 }
 
 nlohmann::json CorrectionJson(const Eigen::Isometry3d& T) {
@@ -74,8 +74,8 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
        "matcher_status,conditioning,points,outliers_removed,detail\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
-    s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp
-      << std::defaultfloat << std::setprecision(9);
+    s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
+      << std::setprecision(9);
     AppendComponents(s, r.step.increment_correction);
     AppendComponents(s, r.step.cumulative_correction);
     s << ',' << ToString(r.status) << ',' << ToString(r.fallback_reason) << ','
@@ -132,8 +132,8 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
       {"fallbacks", fallbacks},
       {"bad_frames", bad},
       {"distance_m", chain ? chain->path_length_m() : 0.0},
-      {"final_correction", CorrectionJson(chain ? chain->back().cumulative_correction
-                                                : Eigen::Isometry3d::Identity())},
+      {"final_correction",
+       CorrectionJson(chain ? chain->back().cumulative_correction : Eigen::Isometry3d::Identity())},
       {"timing", timing},
       {"frames_per_second",
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
@@ -193,8 +193,9 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     }
     DrawLine(img, axes, index, values, Colour(1), 2);
   }
-  DrawLegend(img, {{"registered increment vs dead reckoning", Colour(1)},
-                   {"dead reckoning used (fallback / bad frame)", kRed}},
+  DrawLegend(img,
+             {{"registered increment vs dead reckoning", Colour(1)},
+              {"dead reckoning used (fallback / bad frame)", kRed}},
              {translation.area.x + 15, translation.area.y + 20});
 
   // Panel 3: drift against distance.

@@ -33,10 +33,10 @@ std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& result
 
 /// What the caller measured around the mapper.
 struct RunInfo {
-  std::string sequence;        ///< input (for the record)
-  double wall_ms = 0.0;        ///< whole run, reading included
-  double write_ms = 0.0;       ///< writing the outputs before summary.json
-  double peak_rss_mb = 0.0;    ///< PeakRssMb() at the end
+  std::string sequence;      ///< input (for the record)
+  double wall_ms = 0.0;      ///< whole run, reading included
+  double write_ms = 0.0;     ///< writing the outputs before summary.json
+  double peak_rss_mb = 0.0;  ///< PeakRssMb() at the end
 };
 
 /// summary.json: frames, registered, partial, fallbacks (whole increment from dead reckoning,

@@ -17,24 +17,33 @@ Judgement Reject(FallbackReason reason, const std::string& detail) {
 
 const char* ToString(FallbackReason reason) {
   switch (reason) {
-    case FallbackReason::kNone: return "none";
-    case FallbackReason::kFirstFrame: return "first_frame";
-    case FallbackReason::kBadFrame: return "bad_frame";
-    case FallbackReason::kNoReference: return "no_reference";
-    case FallbackReason::kRegistrationFailed: return "registration_failed";
-    case FallbackReason::kLowInlierRatio: return "low_inlier_ratio";
-    case FallbackReason::kHighRms: return "high_rms";
-    case FallbackReason::kImplausibleCorrection: return "implausible_correction";
-    case FallbackReason::kMissing: return "missing";
+    case FallbackReason::kNone:
+      return "none";
+    case FallbackReason::kFirstFrame:
+      return "first_frame";
+    case FallbackReason::kBadFrame:
+      return "bad_frame";
+    case FallbackReason::kNoReference:
+      return "no_reference";
+    case FallbackReason::kRegistrationFailed:
+      return "registration_failed";
+    case FallbackReason::kLowInlierRatio:
+      return "low_inlier_ratio";
+    case FallbackReason::kHighRms:
+      return "high_rms";
+    case FallbackReason::kImplausibleCorrection:
+      return "implausible_correction";
+    case FallbackReason::kMissing:
+      return "missing";
   }
   return "unknown";
 }
 
 OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& o) {
   const double length = std::abs(step_length_m);
-  return {o.odometry_sigma_translation_ratio * length + o.odometry_sigma_translation_m,
-          (o.odometry_sigma_rotation_deg_per_m * length + o.odometry_sigma_rotation_deg) *
-              kDegToRad};
+  return {
+      o.odometry_sigma_translation_ratio * length + o.odometry_sigma_translation_m,
+      (o.odometry_sigma_rotation_deg_per_m * length + o.odometry_sigma_rotation_deg) * kDegToRad};
 }
 
 Judgement JudgeRegistration(const registration::RegistrationResult& result,

@@ -38,9 +38,8 @@ void AddStereoCovariances(registration::PointCloud* cloud, const io::CameraModel
   const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
   cloud->covariances.resize(cloud->size());
   for (std::size_t i = 0; i < cloud->size(); ++i) {
-    cloud->covariances[i] = stereo::PointCovariance(cloud->points[i], camera,
-                                                    options.disparity_sigma_px,
-                                                    options.pixel_sigma_px);
+    cloud->covariances[i] = stereo::PointCovariance(
+        cloud->points[i], camera, options.disparity_sigma_px, options.pixel_sigma_px);
   }
 }
 
@@ -66,8 +65,7 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     stereo::StereoPointsResult points =
         stereo::ComputePoints(frame.left, frame.right, camera, setup.T_body_sensor, setup.stereo);
     out.stereo_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (points.status != stereo::StereoStatus::kOk) {
       out.reason = "stereo: " + points.message;
       return out;
@@ -84,10 +82,10 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
   }
   out.dropped_nonfinite = DropNonFinite(&out.cloud);
   if (out.cloud.size() < min_points) {
-    out.reason = (out.cloud.empty() ? std::string("no usable points")
-                                    : "too few points (" + std::to_string(out.cloud.size()) +
-                                          " < mapper.min_points " + std::to_string(min_points) +
-                                          ")");
+    out.reason =
+        (out.cloud.empty() ? std::string("no usable points")
+                           : "too few points (" + std::to_string(out.cloud.size()) +
+                                 " < mapper.min_points " + std::to_string(min_points) + ")");
     if (out.dropped_nonfinite > 0)
       out.reason += ", " + std::to_string(out.dropped_nonfinite) + " non-finite dropped";
     return out;

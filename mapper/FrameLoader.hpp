@@ -25,9 +25,9 @@ struct SensorSetup {
 /// One frame's points in the body frame.
 struct LoadedFrame {
   bool ok = false;
-  std::string reason;              ///< why not ok ("stereo: ...", "no finite points", ...)
-  registration::PointCloud cloud;  ///< body frame; covariances when the sensor gives them
-  std::size_t input_points = 0;    ///< cloud: points read; stereo: pixels examined [count]
+  std::string reason;                 ///< why not ok ("stereo: ...", "no finite points", ...)
+  registration::PointCloud cloud;     ///< body frame; covariances when the sensor gives them
+  std::size_t input_points = 0;       ///< cloud: points read; stereo: pixels examined [count]
   std::size_t dropped_nonfinite = 0;  ///< non-finite points or covariances [count]
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)
 };

@@ -26,9 +26,9 @@ class LocalMap {
 
   /// Every held point moved into the frame at `T_world_ref` (by T_world_ref⁻¹), thinned again
   /// to one point per voxel of `voxel_m` (<= 0: all), indexed with `options`.
-  std::unique_ptr<registration::IndexedCloud> Build(const Eigen::Isometry3d& T_world_ref,
-                                                    double voxel_m,
-                                                    const registration::RegistrationOptions& options) const;
+  std::unique_ptr<registration::IndexedCloud> Build(
+      const Eigen::Isometry3d& T_world_ref, double voxel_m,
+      const registration::RegistrationOptions& options) const;
 
   std::size_t frames() const { return frames_.size(); }
   std::size_t points() const;

@@ -34,9 +34,8 @@ SensorSetup MakeSensor(const io::SequenceInfo& sequence, const stereo::StereoOpt
   SensorSetup sensor{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options};
   if (sequence.camera) {
     const io::CameraModel& c = *sequence.camera;
-    sensor.stereo = stereo::ResolveDisparities(
-        options, {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0}, c.width, c.height,
-        sequence.T_body_sensor);
+    sensor.stereo = stereo::ResolveDisparities(options, {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0},
+                                               c.width, c.height, sequence.T_body_sensor);
   }
   return sensor;
 }
@@ -45,11 +44,16 @@ SensorSetup MakeSensor(const io::SequenceInfo& sequence, const stereo::StereoOpt
 
 const char* ToString(FrameStatus status) {
   switch (status) {
-    case FrameStatus::kFirst: return "first";
-    case FrameStatus::kRegistered: return "registered";
-    case FrameStatus::kPartial: return "partial";
-    case FrameStatus::kFallback: return "fallback";
-    case FrameStatus::kBadFrame: return "bad_frame";
+    case FrameStatus::kFirst:
+      return "first";
+    case FrameStatus::kRegistered:
+      return "registered";
+    case FrameStatus::kPartial:
+      return "partial";
+    case FrameStatus::kFallback:
+      return "fallback";
+    case FrameStatus::kBadFrame:
+      return "bad_frame";
   }
   return "unknown";
 }

@@ -45,7 +45,7 @@ struct StageTimes {
   double register_ms = 0.0;  ///< the matcher (incl. its trees and normals)
   double fuse_dem_ms = 0.0;
   double fuse_octomap_ms = 0.0;  ///< handing the frame to the OctoMap's thread (waits if busy)
-  double total_ms = 0.0;     ///< ProcessFrame as a whole (without load_ms)
+  double total_ms = 0.0;         ///< ProcessFrame as a whole (without load_ms)
 };
 
 /// How a frame's increment was obtained (drift.csv `status`).
@@ -64,10 +64,10 @@ struct FrameResult {
   double timestamp = 0.0;
   FrameStatus status = FrameStatus::kFirst;
   FallbackReason fallback_reason = FallbackReason::kNone;
-  std::string detail;                ///< the judge's or loader's explanation, if any
-  ChainStep step;                    ///< pose, dead reckoning, corrections, covariance
+  std::string detail;  ///< the judge's or loader's explanation, if any
+  ChainStep step;      ///< pose, dead reckoning, corrections, covariance
   std::optional<Eigen::Isometry3d> T_world_body_truth;  ///< when the frame carries it
-  unsigned odometry_directions = 0;  ///< Direction bits kept from dead reckoning
+  unsigned odometry_directions = 0;                     ///< Direction bits kept from dead reckoning
   /// The matcher's result (status "-" when it did not run).
   std::string matcher_status = "-";
   int iterations = 0;

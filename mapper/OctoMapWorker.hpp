@@ -24,7 +24,8 @@ class OctoMapWorker {
 
   /// Queues one frame's world points seen from `sensor_origin_world`; waits first while an
   /// earlier frame is still queued (not while it is being inserted). Never throws.
-  void Insert(std::vector<Eigen::Vector3d> points_world, const Eigen::Vector3d& sensor_origin_world);
+  void Insert(std::vector<Eigen::Vector3d> points_world,
+              const Eigen::Vector3d& sensor_origin_world);
 
   /// Waits until every queued frame is in the tree, then gives the map (for writing).
   const dem::OctoMapFusion& Fusion() const;

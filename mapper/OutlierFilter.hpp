@@ -12,8 +12,8 @@ namespace rovermap::mapper {
 
 /// Which points to keep.
 struct OutlierMask {
-  std::vector<unsigned char> keep;  ///< one per point; 1 = keep
-  std::size_t removed = 0;          ///< points flagged isolated [count]
+  std::vector<unsigned char> keep;   ///< one per point; 1 = keep
+  std::size_t removed = 0;           ///< points flagged isolated [count]
   double angular_spacing_rad = 0.0;  ///< median nearest-neighbour distance / range, as used
 };
 

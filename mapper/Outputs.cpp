@@ -11,8 +11,8 @@
 
 namespace rovermap::mapper {
 
-nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper,
-                            RunInfo run, const eval::EvalOptions& eval_options) {
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
+                            const eval::EvalOptions& eval_options) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<FrameResult>& results = mapper.results();
 

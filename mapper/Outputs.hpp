@@ -17,7 +17,7 @@ namespace rovermap::mapper {
 /// here; `run.peak_rss_mb` is taken here when 0.
 /// @return the summary written.
 /// @throw io::IoError naming the file that could not be written.
-nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper,
-                            RunInfo run, const eval::EvalOptions& eval_options);
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
+                            const eval::EvalOptions& eval_options);
 
 }  // namespace rovermap::mapper

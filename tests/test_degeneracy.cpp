@@ -15,8 +15,8 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 Eigen::Isometry3d Pose(const Eigen::Vector3d& rotation_vector, const Eigen::Vector3d& t) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   if (rotation_vector.norm() > 0)
-    T.linear() = Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized())
-                     .toRotationMatrix();
+    T.linear() =
+        Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix();
   T.translation() = t;
   return T;
 }
@@ -55,8 +55,8 @@ TEST(Degeneracy, PlaneKeepsPredictionInXYYawAndRegistrationInZRollPitch) {
   const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0.0, 0.0});
   // The registration moved every direction; on a plane only z, roll and pitch are trustworthy.
   const Eigen::Isometry3d registered = Pose({0.01, -0.008, 0.05}, {0.6, 0.05, 0.03});
-  const BlendedIncrement b = BlendIncrement(predicted, registered, PlaneInformation(5.0), 5.0,
-                                            1e-3, Diagonal(0.01, 0.02));
+  const BlendedIncrement b =
+      BlendIncrement(predicted, registered, PlaneInformation(5.0), 5.0, 1e-3, Diagonal(0.01, 0.02));
   EXPECT_EQ(b.odometry_directions, kYaw | kX | kY) << DirectionNames(b.odometry_directions);
   EXPECT_EQ(b.constrained, 3);
   EXPECT_LT(b.min_ratio, 1e-12);
@@ -102,8 +102,8 @@ TEST(Degeneracy, FullRankInformationKeepsTheRegistrationWhole) {
 TEST(Degeneracy, ZeroInformationKeepsThePredictionWhole) {
   const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0, 0});
   const Eigen::Isometry3d registered = Pose({0, 0, 0.03}, {0.55, 0.01, 0});
-  const BlendedIncrement none = BlendIncrement(predicted, registered, Matrix6d::Zero(), 5.0,
-                                               1e-3, Diagonal(0.01, 0.02));
+  const BlendedIncrement none =
+      BlendIncrement(predicted, registered, Matrix6d::Zero(), 5.0, 1e-3, Diagonal(0.01, 0.02));
   EXPECT_EQ(none.constrained, 0);
   EXPECT_LT((none.T.matrix() - predicted.matrix()).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_EQ(none.covariance, Diagonal(0.01, 0.02));

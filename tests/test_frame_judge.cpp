@@ -23,7 +23,8 @@ RegistrationResult Good() {
 
 Eigen::Isometry3d Step(double forward_m, double yaw_deg) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.linear() =
+      Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(forward_m, 0, 0);
   return T;
 }

@@ -42,7 +42,8 @@ TEST(LocalMap, KeepsTheLastFramesInTheReferenceFrame) {
   EXPECT_TRUE(cloud->cloud().points[11].isApprox(Eigen::Vector3d(0.1, 0.1, 0)));
   EXPECT_TRUE(cloud->cloud().normals[11].isApprox(Eigen::Vector3d(0, 0, 1)));
   // The frame at x = 100 is 100 m behind (rotated by the reference's yaw). Frame 0 is gone.
-  const Eigen::Vector3d older = Shift(200.0, 0.3).inverse() * Shift(100.0) * Eigen::Vector3d(0, 0, 0);
+  const Eigen::Vector3d older =
+      Shift(200.0, 0.3).inverse() * Shift(100.0) * Eigen::Vector3d(0, 0, 0);
   EXPECT_TRUE(cloud->cloud().points[100].isApprox(older));
 }
 

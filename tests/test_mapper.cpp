@@ -103,13 +103,15 @@ Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
   const auto& odo = run.drift.odometry;
   Traverse t;
   t.drift_ratio = reg.ate_origin_m.rmse / odo.ate_origin_m.rmse;
-  for (const auto& r : run.mapper->results()) t.ran_to_max_iterations += r.matcher_status == "max_iterations";
+  for (const auto& r : run.mapper->results())
+    t.ran_to_max_iterations += r.matcher_status == "max_iterations";
   t.dem = Compare(run.mapper->elevation_map(),
                   [&](double x, double y) { return simulator->terrain().Height(x, y); });
-  std::printf("%s: ATE origin registered %.4f m, dead reckoning %.4f m; DEM %zu cells, RMSE %.4f m, "
-              "p95 %.4f m, %zu off by 0.2 m\n",
-              name.c_str(), reg.ate_origin_m.rmse, odo.ate_origin_m.rmse, t.dem.cells,
-              t.dem.rmse_m, t.dem.p95_m, t.dem.off_20cm);
+  std::printf(
+      "%s: ATE origin registered %.4f m, dead reckoning %.4f m; DEM %zu cells, RMSE %.4f m, "
+      "p95 %.4f m, %zu off by 0.2 m\n",
+      name.c_str(), reg.ate_origin_m.rmse, odo.ate_origin_m.rmse, t.dem.cells, t.dem.rmse_m,
+      t.dem.p95_m, t.dem.off_20cm);
   return t;
 }
 
@@ -172,8 +174,8 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   const Replayed run = Replay(seq, options);
   const auto& reg = run.drift.registered;
   const auto& odo = run.drift.odometry;
-  std::printf("kitti: ATE origin registered %.4f m, dead reckoning %.4f m\n",
-              reg.ate_origin_m.rmse, odo.ate_origin_m.rmse);
+  std::printf("kitti: ATE origin registered %.4f m, dead reckoning %.4f m\n", reg.ate_origin_m.rmse,
+              odo.ate_origin_m.rmse);
   // Measured: 0.223 m against dead reckoning's 0.365 m (its 3 % scale error; the registration
   // reads the steps about 1 % long on this real stereo).
   EXPECT_LT(reg.ate_origin_m.rmse, 0.75 * odo.ate_origin_m.rmse);

@@ -58,7 +58,8 @@ TEST(OutlierFilter, MatchesBruteForce) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> u(-5.0, 5.0);
   std::vector<Eigen::Vector3d> points(3000);
-  for (auto& p : points) p = Eigen::Vector3d(u(rng), u(rng), 0.2 * u(rng)) + Eigen::Vector3d(8, 0, 0);
+  for (auto& p : points)
+    p = Eigen::Vector3d(u(rng), u(rng), 0.2 * u(rng)) + Eigen::Vector3d(8, 0, 0);
   const Eigen::Vector3d sensor(0, 0, 1);
   const registration::KdTree tree(points);
   const mapper::OutlierMask mask = mapper::FindIsolatedPoints(points, tree, sensor, 2.0, 3);

@@ -28,9 +28,9 @@ namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";
 const fs::path kTinyStereo = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo";
-const std::vector<std::string> kOutputs = {"dem.tif",     "map.bt",    "trajectory.tum",
+const std::vector<std::string> kOutputs = {"dem.tif",      "map.bt",    "trajectory.tum",
                                            "odometry.tum", "drift.csv", "summary.json",
-                                           "dem.png",     "drift.png"};
+                                           "dem.png",      "drift.png"};
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> lines;
@@ -89,7 +89,8 @@ class Replay : public rovermap::testing::CommandFixture {
   }
 
   nlohmann::json Run(const fs::path& seq, const fs::path& out, const std::string& extra = "") {
-    const CommandResult r = Rovermap("replay " + seq.string() + " --out " + out.string() + " " + extra);
+    const CommandResult r =
+        Rovermap("replay " + seq.string() + " --out " + out.string() + " " + extra);
     EXPECT_EQ(r.status, 0) << r.err;
     if (r.status != 0) return {};
     return nlohmann::json::parse(Slurp(out / "summary.json"));
@@ -121,15 +122,15 @@ TEST_F(Replay, TinyCloudSequenceWritesTheWholeOutputSet) {
   EXPECT_EQ(summary["frames"], 5);
   EXPECT_EQ(summary["bad_frames"], 0);
   EXPECT_EQ(summary["registered"].get<int>() + summary["fallbacks"].get<int>(), 4);
-  for (const char* key : {"distance_m", "final_correction", "timing", "frames_per_second",
-                          "peak_rss_mb", "metrics"})
+  for (const char* key :
+       {"distance_m", "final_correction", "timing", "frames_per_second", "peak_rss_mb", "metrics"})
     EXPECT_TRUE(summary.contains(key)) << key;
   for (const char* stage : {"load", "stereo", "register", "fuse_dem", "fuse_octomap", "write"})
     EXPECT_TRUE(summary["timing"].contains(stage)) << stage;
   for (const char* which : {"registered", "odometry"})
-    for (const char* key : {"ate_rmse_m", "ate_rmse_origin_m", "rpe_trans_rmse_m",
-                            "rpe_rot_rmse_deg", "kitti_trans_percent", "kitti_rot_deg_per_m",
-                            "pairs", "length_m"})
+    for (const char* key :
+         {"ate_rmse_m", "ate_rmse_origin_m", "rpe_trans_rmse_m", "rpe_rot_rmse_deg",
+          "kitti_trans_percent", "kitti_rot_deg_per_m", "pairs", "length_m"})
       EXPECT_TRUE(summary["metrics"][which].contains(key)) << which << "." << key;
 
   // One pose per frame, with the sequence's timestamps; frame 0 is odometry pose 0.
@@ -208,7 +209,9 @@ TEST_F(Replay, BadSequencesStopBeforeAnyOutput) {
        [](const fs::path& s) { fs::copy_file(s / "frames/000004.ply", s / "frames/000005.ply"); },
        1, "000005"},
       {"unknown_key",
-       [](const fs::path& s) { std::ofstream(s / "sequence.yaml", std::ios::app) << "colour: red\n"; },
+       [](const fs::path& s) {
+         std::ofstream(s / "sequence.yaml", std::ios::app) << "colour: red\n";
+       },
        1, "colour"},
   };
   for (const Case& c : cases) {
@@ -331,9 +334,9 @@ namespace {
 
 // Errors of an estimate against the truth at one frame, in the true body frame: translation (m)
 // and roll, pitch, yaw (deg).
-rovermap::mapper::TransformComponents ErrorAt(const std::vector<rovermap::io::StampedPose>& estimate,
-                                              const std::vector<rovermap::io::StampedPose>& truth,
-                                              std::size_t k) {
+rovermap::mapper::TransformComponents ErrorAt(
+    const std::vector<rovermap::io::StampedPose>& estimate,
+    const std::vector<rovermap::io::StampedPose>& truth, std::size_t k) {
   return rovermap::mapper::CorrectionComponents(truth[k].T_world_body.inverse() *
                                                 estimate[k].T_world_body);
 }
@@ -343,13 +346,15 @@ rovermap::mapper::TransformComponents ErrorAt(const std::vector<rovermap::io::St
 TEST_F(Replay, FlatGroundKeepsOdometryInXYYawAndCorrectsZRollPitch) {
   // A featureless tilted plane: no relief, craters or rocks. Dead reckoning gets a pitch bias of
   // 0.1° and a height drift of 1 cm per frame on top of the simulator's errors.
-  const fs::path seq = Simulate("flat", "--set sim.sensor=cloud --set sim.frames=20 "
-                                        "--set sim.relief_m=0 --set sim.craters=0 --set sim.rocks=0");
+  const fs::path seq = Simulate("flat",
+                                "--set sim.sensor=cloud --set sim.frames=20 "
+                                "--set sim.relief_m=0 --set sim.craters=0 --set sim.rocks=0");
   auto odometry = rovermap::io::ReadTum(seq / "odometry.tum");
   for (std::size_t k = 0; k < odometry.size(); ++k) {
     Eigen::Isometry3d& T = odometry[k].T_world_body;
-    T.linear() = T.linear() *
-                 Eigen::AngleAxisd(0.1 * k * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.linear() =
+        T.linear() *
+        Eigen::AngleAxisd(0.1 * k * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
     T.translation().z() += 0.01 * static_cast<double>(k);
   }
   rovermap::io::WriteTum(seq / "odometry.tum", odometry);
