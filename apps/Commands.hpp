@@ -61,6 +61,16 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunReplay(const ReplayArgs& args);
 
+struct ServeArgs {
+  ConfigArgs config;
+  std::string inbox;  ///< inbox directory (DESIGN.md §7)
+  std::string out;    ///< output directory (holds the checkpoint and the lock)
+};
+CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError / mapper::DaemonBusyError; returns the
+/// exit status.
+int RunServe(const ServeArgs& args);
+
 /// A command-line value that parses but makes no sense (exit 2).
 class UsageError : public std::runtime_error {
  public:

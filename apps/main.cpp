@@ -44,6 +44,8 @@ int main(int argc, char** argv) {
   CLI::App* eval_cmd = AddEvalCommand(&app, &eval_args);
   ReplayArgs replay_args;
   CLI::App* replay_cmd = AddReplayCommand(&app, &replay_args);
+  ServeArgs serve_args;
+  CLI::App* serve_cmd = AddServeCommand(&app, &serve_args);
 
   try {
     app.parse(argc, argv);
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
     if (simulate_cmd->parsed()) return RunSimulate(simulate_args);
     if (eval_cmd->parsed()) return RunEval(eval_args);
     if (replay_cmd->parsed()) return RunReplay(replay_args);
+    if (serve_cmd->parsed()) return RunServe(serve_args);
   } catch (const rovermap::config::ConfigError& e) {
     std::cerr << "rovermap: config error: " << e.what() << "\n";
     return kExitUsage;

@@ -10,6 +10,7 @@
 #include "dem/OctoMapOptions.hpp"
 #include "eval/EvalOptions.hpp"
 #include "mapper/MapperOptions.hpp"
+#include "mapper/ServeOptions.hpp"
 #include "registration/Options.hpp"
 #include "sim/SimOptions.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -26,6 +27,7 @@ struct Config {
   dem::OctoMapOptions octomap;
   eval::EvalOptions eval;
   mapper::MapperOptions mapper;
+  mapper::ServeOptions serve;
 };
 
 /// Builds a Config: the struct defaults, then `file` (nested YAML, one mapping per section),

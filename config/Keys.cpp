@@ -261,6 +261,18 @@ std::vector<KeyEntry> BuildRegistry() {
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
 
+  using V = mapper::ServeOptions;
+  SectionKeys<V> serve(keys, "serve", &Config::serve);
+  serve.Bool("use_inotify", &V::use_inotify, "watch the inbox with inotify (else poll)");
+  serve.Double("poll_interval_s", &V::poll_interval_s, "s", GreaterThan(0),
+               "between looks at the inbox when polling; longest wait otherwise");
+  serve.Double("gap_timeout_s", &V::gap_timeout_s, "s", AtLeast(0),
+               "a missing frame holds the queue this long, then is declared missing");
+  serve.Int("publish_every", &V::publish_every, "frames", AtLeast(1),
+            "publish the outputs after this many frames (and on exit)");
+  serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),
+            "snapshot the state after this many frames (each is journalled)");
+
   return keys;
 }
 

@@ -94,6 +94,24 @@ Tile& ElevationMap::TileFor(TileIndex tile_index, FusionStats* stats) {
   return *slot;
 }
 
+void ElevationMap::RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells) {
+  const auto n = static_cast<std::size_t>(options_.tile_cells);
+  if (cells.size() != n * n) {
+    throw std::invalid_argument("ElevationMap::RestoreTile: " + std::to_string(cells.size()) +
+                                " cells, a tile holds " + std::to_string(n * n));
+  }
+  auto tile = std::make_unique<Tile>(0);
+  tile->cells = std::move(cells);
+  for (const CellRecord& record : tile->cells) tile->filled += record.value.count > 0 ? 1 : 0;
+  cache_ = TileCache{};
+  tiles_[tile_index] = std::move(tile);
+}
+
+void ElevationMap::RestoreCounters(const CellBounds& bounds, std::size_t covariances_ignored) {
+  bounds_ = bounds;
+  covariances_ignored_ = covariances_ignored;
+}
+
 bool ElevationMap::WithinGate(double h, double p, double z, double r) const {
   const double d = z - h;
   return d * d <= options_.mahalanobis_gate * (p + r);

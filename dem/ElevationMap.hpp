@@ -240,6 +240,13 @@ class ElevationMap {
   const CellBounds& bounds() const { return bounds_; }
   /// Bytes held by the tiles' layers (not the hash table overhead).
   std::size_t MemoryBytes() const;
+  /// Restoring a saved map (mapper/Checkpoint): replaces the tile at `tile_index` by `cells`
+  /// (tile_cells² records as Tile stores them; its filled count is recounted).
+  /// @throw std::invalid_argument if `cells` has the wrong size.
+  void RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells);
+  /// ...and the counters that FuseFrame keeps beside the tiles.
+  void RestoreCounters(const CellBounds& bounds, std::size_t covariances_ignored);
+
   /// Sizes mismatched between points and covariances over all FuseFrame calls [count].
   std::size_t covariances_ignored() const { return covariances_ignored_; }
 

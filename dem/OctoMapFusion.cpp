@@ -1,6 +1,12 @@
 #include "dem/OctoMapFusion.hpp"
 
+#include <octomap/AbstractOcTree.h>
+
 #include <cmath>
+#include <cstdint>
+#include <istream>
+#include <memory>
+#include <ostream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -71,6 +77,34 @@ void OctoMapFusion::UpdateInner() const {
   if (tree_ && inner_stale_) tree_->updateInnerOccupancy();
   inner_stale_ = false;
   frames_since_update_ = 0;
+}
+
+bool OctoMapFusion::Save(std::ostream& out) const {
+  const std::int32_t schedule[2] = {frames_since_update_, inner_stale_ ? 1 : 0};
+  out.write(reinterpret_cast<const char*>(schedule), sizeof(schedule));
+  if (tree_) tree_->write(out);
+  return static_cast<bool>(out);
+}
+
+void OctoMapFusion::Restore(std::istream& in) {
+  std::int32_t schedule[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(schedule), sizeof(schedule));
+  if (!in) throw std::runtime_error("OctoMap state: truncated");
+  if (options_.enabled) {
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
+    auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+    if (tree == nullptr) throw std::runtime_error("OctoMap state: not an OcTree");
+    if (tree->getResolution() != options_.resolution_m) {
+      throw std::runtime_error("OctoMap state: resolution differs from octomap.resolution_m");
+    }
+    read.release();
+    tree_.reset(tree);
+    // .ot keeps the log-odds, not the sensor model.
+    tree_->setProbHit(options_.prob_hit);
+    tree_->setProbMiss(options_.prob_miss);
+  }
+  frames_since_update_ = schedule[0];
+  inner_stale_ = schedule[1] != 0;
 }
 
 const octomap::OcTree* OctoMapFusion::tree() const {

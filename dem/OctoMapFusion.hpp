@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <iosfwd>
 #include <memory>
 #include <vector>
 
@@ -38,6 +39,15 @@ class OctoMapFusion {
   /// The tree with its inner nodes up to date (brought up to date here, not per frame);
   /// nullptr when disabled. Not thread-safe against InsertFrame.
   const octomap::OcTree* tree() const;
+
+  /// The whole state for a checkpoint (mapper/Checkpoint): the tree with its log-odds as they
+  /// are (OctoMap's .ot format, inner nodes not brought up to date, so that a restored map goes
+  /// on exactly as this one would) and the inner-update schedule. Nothing when disabled.
+  /// @return false if the stream failed.
+  bool Save(std::ostream& out) const;
+  /// Replaces the state by one Save wrote with the same options.
+  /// @throw std::runtime_error if the data are not such a state.
+  void Restore(std::istream& in);
 
  private:
   OctoMapOptions options_;

@@ -76,6 +76,11 @@ std::string ReadWholeFile(const std::filesystem::path& path) {
 }
 
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents) {
+  CommitTemporaryFile(WriteTemporaryFile(path, contents), path);
+}
+
+std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
+                                         std::string_view contents) {
   if (path.empty() || !path.has_filename()) {
     throw IoError(path.string() + ": not a file path");
   }
@@ -110,8 +115,13 @@ void WriteFileAtomically(const std::filesystem::path& path, std::string_view con
   // Flush before the rename so that a crash cannot leave a renamed but empty file.
   if (::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
   if (fd.Close() != 0) fail("cannot close file", errno);
+  return temp;
+}
 
-  CommitTemporaryFile(temp, path);
+void SyncDirectory(const std::filesystem::path& directory) {
+  FdGuard fd(::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (fd.Get() < 0) ThrowErrno(directory, "cannot open directory", errno);
+  if (::fsync(fd.Get()) != 0) ThrowErrno(directory, "cannot flush directory", errno);
 }
 
 void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path) {

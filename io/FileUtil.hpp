@@ -16,6 +16,15 @@ std::string ReadWholeFile(const std::filesystem::path& path);
 /// temporary is removed and IoError (naming `path`) is thrown.
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
 
+/// The first half of WriteFileAtomically: `contents` written and flushed to a new
+/// `<path>.tmp-XXXXXX`, whose name is returned for CommitTemporaryFile.
+std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
+                                         std::string_view contents);
+
+/// Flushes a directory's entries (a rename in it) to disk, for durability across power loss.
+/// @throw IoError naming the directory.
+void SyncDirectory(const std::filesystem::path& directory);
+
 /// Renames a finished temporary file over `path` (the last step of every atomic write).
 /// On failure the temporary is removed and IoError (naming `path`) is thrown.
 void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path);

@@ -26,21 +26,24 @@ struct FrameFiles {
   bool ply = false;
 };
 
-// "000042.left.png" -> 42 and the kind; false for names that are not frame files.
-bool ParseFrameName(const std::string& name, std::size_t* index, std::string* kind) {
+}  // namespace
+
+bool ParseFrameFileName(const std::string& name, std::size_t* index, std::string* kind) {
   const auto dot = name.find('.');
   if (dot == 0 || dot == std::string::npos || dot > 12) return false;
   for (std::size_t i = 0; i < dot; ++i) {
     if (name[i] < '0' || name[i] > '9') return false;
   }
   const std::string rest = name.substr(dot + 1);
-  if (rest != "left.png" && rest != "right.png" && rest != "ply") return false;
+  if (rest != "left.png" && rest != "right.png" && rest != "ply" && rest != "odom" && rest != "gt") {
+    return false;
+  }
   *index = std::stoul(name.substr(0, dot));
   *kind = rest;
   return true;
 }
 
-cv::Mat ReadGrey(const fs::path& file, const CameraModel& camera) {
+cv::Mat ReadStereoImage(const fs::path& file, const CameraModel& camera) {
   const cv::Mat image = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
   if (image.empty()) throw IoError(file.string() + ": cannot read or decode the image");
   if (image.cols != camera.width || image.rows != camera.height) {
@@ -51,7 +54,16 @@ cv::Mat ReadGrey(const fs::path& file, const CameraModel& camera) {
   return image;
 }
 
-}  // namespace
+void ReadFrameData(const fs::path& stem, const SequenceInfo& info, Frame* frame) {
+  if (info.sensor_type == SensorType::kStereo) {
+    frame->file = stem.string() + ".left.png";
+    frame->left = ReadStereoImage(frame->file, *info.camera);
+    frame->right = ReadStereoImage(stem.string() + ".right.png", *info.camera);
+  } else {
+    frame->file = stem.string() + ".ply";
+    frame->cloud = ReadPly(frame->file);
+  }
+}
 
 std::string FrameStem(std::size_t index) {
   char buffer[32];
@@ -131,7 +143,8 @@ SequenceReader::SequenceReader(const fs::path& sequence_dir) {
     const std::string name = entry.path().filename().string();
     std::size_t index = 0;
     std::string kind;
-    if (!ParseFrameName(name, &index, &kind)) continue;  // other files are not ours
+    // Other files are not ours (an inbox's .odom and .gt lines neither: odometry.tum holds them).
+    if (!ParseFrameFileName(name, &index, &kind) || kind == "odom" || kind == "gt") continue;
     if (name.compare(0, name.find('.'), FrameStem(index)) != 0) {
       throw IoError(entry.path().string() + ": frame files are named " + FrameStem(index) + "." +
                     kind + " (six or more digits, zero-padded)");
@@ -177,15 +190,7 @@ Frame SequenceReader::Read(std::size_t index) const {
   frame.timestamp = odometry_[index].timestamp;
   frame.T_world_body_odom = odometry_[index].T_world_body;
   if (!groundtruth_.empty()) frame.T_world_body_truth = groundtruth_[index].T_world_body;
-  const fs::path stem = info_.directory / "frames" / FrameStem(index);
-  if (info_.sensor_type == SensorType::kStereo) {
-    frame.file = stem.string() + ".left.png";
-    frame.left = ReadGrey(frame.file, *info_.camera);
-    frame.right = ReadGrey(stem.string() + ".right.png", *info_.camera);
-  } else {
-    frame.file = stem.string() + ".ply";
-    frame.cloud = ReadPly(frame.file);
-  }
+  ReadFrameData(info_.directory / "frames" / FrameStem(index), info_, &frame);
   return frame;
 }
 

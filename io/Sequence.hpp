@@ -40,6 +40,13 @@ SequenceInfo ReadSequenceInfo(const std::filesystem::path& sequence_dir);
 /// "000042.ply".
 std::string FrameStem(std::size_t index);
 
+/// "000042.left.png" -> 42 and "left.png"; the kinds are left.png, right.png, ply, and an
+/// inbox's odom and gt (DESIGN §7). False for other names (dot-names among them).
+bool ParseFrameFileName(const std::string& name, std::size_t* index, std::string* kind);
+
+/// An 8-bit grey image that must have the camera's size. @throw IoError naming the file.
+cv::Mat ReadStereoImage(const std::filesystem::path& file, const CameraModel& camera);
+
 /// One frame as read from disk.
 struct Frame {
   std::size_t index = 0;
@@ -51,6 +58,10 @@ struct Frame {
   registration::PointCloud cloud;  ///< cloud: points in the sensor frame
   std::filesystem::path file;      ///< left image or PLY file (for messages)
 };
+
+/// Reads the images (stereo: `stem`.left.png and .right.png) or the points (`stem`.ply) of a
+/// frame into `frame` (its poses are left alone). @throw IoError naming the file.
+void ReadFrameData(const std::filesystem::path& stem, const SequenceInfo& info, Frame* frame);
 
 /// Opens and validates a sequence; then Next() reads frames in index order.
 ///

@@ -25,6 +25,8 @@ class AttitudePrior {
 
   /// Current variance of the chained roll and pitch [rad²].
   double variance() const { return variance_; }
+  /// Restores the variance a saved prior had (mapper/Checkpoint).
+  void RestoreVariance(double variance) { variance_ = variance; }
 
  private:
   double odometry_variance_ = 0.0;  // [rad²]

@@ -156,6 +156,7 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},
                           {"odometry", eval::ToJson(drift->odometry)}};
   }
+  for (const auto& [key, value] : run.extra.items()) summary[key] = value;
   return summary;
 }
 

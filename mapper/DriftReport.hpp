@@ -37,6 +37,7 @@ struct RunInfo {
   double wall_ms = 0.0;      ///< whole run, reading included
   double write_ms = 0.0;     ///< writing the outputs before summary.json
   double peak_rss_mb = 0.0;  ///< PeakRssMb() at the end
+  nlohmann::json extra = nlohmann::json::object();  ///< more top-level keys (serve's queue)
 };
 
 /// summary.json: frames, registered, partial, fallbacks (whole increment from dead reckoning,

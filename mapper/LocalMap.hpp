@@ -6,7 +6,9 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <deque>
+#include <iterator>
 #include <memory>
+#include <vector>
 
 #include "registration/Icp.hpp"
 #include "registration/PointCloud.hpp"
@@ -31,6 +33,11 @@ class LocalMap {
       const registration::RegistrationOptions& options) const;
 
   std::size_t frames() const { return frames_.size(); }
+  /// The held frames (world frame), oldest first, and their restoration (mapper/Checkpoint).
+  const std::deque<registration::PointCloud>& clouds() const { return frames_; }
+  void Restore(std::vector<registration::PointCloud> clouds) {
+    frames_.assign(std::make_move_iterator(clouds.begin()), std::make_move_iterator(clouds.end()));
+  }
   std::size_t points() const;
   bool empty() const { return frames_.empty(); }
 

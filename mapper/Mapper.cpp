@@ -67,6 +67,7 @@ struct Mapper::Registered {
   Matrix6d covariance_in_previous = Matrix6d::Zero();
   unsigned odometry_directions = 0;
   std::optional<registration::RegistrationResult> matcher;
+  double reference_distance_m = 0.0;  ///< the matcher's D (0: keep the last one)
 };
 
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
@@ -89,6 +90,11 @@ FrameResult Mapper::ProcessFrame(const io::Frame& frame, double load_ms) {
 }
 
 FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, double load_ms) {
+  return Process(frame, std::move(loaded), load_ms, nullptr);
+}
+
+FrameResult Mapper::Process(const io::Frame& frame, LoadedFrame loaded, double load_ms,
+                            const FrameResult* recorded) {
   const auto start = Clock::now();
   if (!loaded.ok) {
     SkipFrame(frame.index, frame.timestamp, frame.T_world_body_odom, FallbackReason::kBadFrame,
@@ -112,9 +118,11 @@ FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, do
   r.outliers_removed = isolated.removed;
   r.time.prepare_ms = MsSince(prepare_start);
 
-  // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction.
+  // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction
+  // (or, re-applying a journalled frame, what that gave).
   const auto register_start = Clock::now();
-  const Registered reg = RegisterOntoReference(*source, frame.T_world_body_odom);
+  const Registered reg = recorded ? Recorded(*recorded)
+                                  : RegisterOntoReference(*source, frame.T_world_body_odom);
   r.time.register_ms = MsSince(register_start);
 
   // 6. Chain the accepted increment (or dead reckoning's).
@@ -125,8 +133,7 @@ FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, do
 
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
-  KeepAsReference(std::move(source), r.step,
-                  reg.matcher ? reg.matcher->reference_distance_m : last_reference_distance_m_);
+  KeepAsReference(std::move(source), r.step, r.reference_distance_m);
   r.time.total_ms = loaded.stereo_ms + MsSince(start);
   results_.push_back(r);
   return r;
@@ -145,6 +152,9 @@ FrameResult Mapper::Begin(const io::Frame& frame, const LoadedFrame& loaded, dou
 }
 
 void Mapper::Report(const Registered& reg, FrameResult* r) {
+  r->T_world_body_registered = reg.T_world_body;
+  r->increment_covariance = reg.covariance_in_previous;
+  r->reference_distance_m = reg.reference_distance_m;
   r->status = reg.status;
   r->fallback_reason = reg.reason;
   r->detail = reg.detail;
@@ -186,6 +196,42 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   return r;
 }
 
+FrameResult Mapper::Reapply(const FrameResult& recorded, const io::Frame* frame) {
+  const std::string where = "frame " + std::to_string(recorded.index) + ": ";
+  if (recorded.status == FrameStatus::kBadFrame) {
+    SkipFrame(recorded.index, recorded.timestamp, recorded.step.T_world_body_odom,
+              recorded.fallback_reason, recorded.detail, recorded.T_world_body_truth);
+  } else {
+    if (frame == nullptr || frame->index != recorded.index) {
+      throw ReapplyError(where + "its files are needed to re-apply it");
+    }
+    LoadedFrame loaded = LoadFrame(*frame, sensor_, options_.mapper.min_points);
+    if (!loaded.ok) throw ReapplyError(where + "could be read before, not now: " + loaded.reason);
+    Process(*frame, std::move(loaded), 0.0, &recorded);
+  }
+  // Re-applied, the chain must land on the very pose it reached the first time.
+  const ChainStep& now = results_.back().step;
+  if (results_.back().status != recorded.status ||
+      now.T_world_body.matrix() != recorded.step.T_world_body.matrix() ||
+      now.covariance != recorded.step.covariance) {
+    throw ReapplyError(where + "re-applied, it does not reach the recorded pose");
+  }
+  results_.back() = recorded;
+  return recorded;
+}
+
+Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
+  Registered out;
+  out.status = recorded.status;
+  out.reason = recorded.fallback_reason;
+  out.detail = recorded.detail;
+  out.T_world_body = recorded.T_world_body_registered;
+  out.covariance_in_previous = recorded.increment_covariance;
+  out.odometry_directions = recorded.odometry_directions;
+  out.reference_distance_m = recorded.reference_distance_m;
+  return out;
+}
+
 Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedCloud& source,
                                                  const Eigen::Isometry3d& T_world_body_odom) {
   Registered out;
@@ -218,6 +264,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
                                   target.cloud().HasCovariances();
   out.matcher = registration::Register(source, target, T_ref_predicted, registration);
   const registration::RegistrationResult& m = *out.matcher;
+  out.reference_distance_m = m.reference_distance_m;
 
   // 4. Judge the registration itself.
   const Judgement judged = JudgeRegistration(m, options_.mapper);

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,20 @@ struct FrameResult {
   std::size_t dropped_nonfinite = 0;
   dem::FusionStats dem;
   StageTimes time;
+  /// What step 6 chained: the registered pose before the attitude prior (nullopt: dead
+  /// reckoning's increment), the increment's covariance, and the registration's D that the
+  /// next frame inherits. A checkpoint's journal keeps them to re-apply the frame (Reapply)
+  /// without registering it again.
+  std::optional<Eigen::Isometry3d> T_world_body_registered;
+  Matrix6d increment_covariance = Matrix6d::Zero();
+  double reference_distance_m = 0.0;
+};
+
+/// A journalled frame that does not re-apply to the state it is given (another configuration,
+/// changed input files).
+class ReapplyError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// One sequence's pipeline. Holds the previous frame's indexed cloud (or the local map), the
@@ -109,6 +124,13 @@ class Mapper {
                         const std::string& detail,
                         const std::optional<Eigen::Isometry3d>& T_world_body_truth = {});
 
+  /// Re-applies a frame processed before (a checkpoint's journal, mapper/Checkpoint): chains
+  /// `recorded`'s increment and fuses the frame's points (read from `frame`, which a bad frame
+  /// does not need: pass nullptr) without registering; the state then equals the one
+  /// ProcessFrame left, and results() ends with `recorded`.
+  /// @throw ReapplyError if the frame cannot be read now or the chained pose differs.
+  FrameResult Reapply(const FrameResult& recorded, const io::Frame* frame);
+
   /// Every frame's result so far, in order.
   const std::vector<FrameResult>& results() const { return results_; }
   /// The chain (nullptr before the first frame).
@@ -123,6 +145,10 @@ class Mapper {
 
  private:
   struct Registered;  // the outcome of register + judge + blend
+  friend struct CheckpointAccess;  // mapper/Checkpoint: the state to and from disk
+  FrameResult Process(const io::Frame& frame, LoadedFrame loaded, double load_ms,
+                      const FrameResult* recorded);
+  static Registered Recorded(const FrameResult& recorded);
   static FrameResult Begin(const io::Frame& frame, const LoadedFrame& loaded, double load_ms);
   static void Report(const Registered& reg, FrameResult* result);
   Registered RegisterOntoReference(const registration::IndexedCloud& source,

@@ -32,6 +32,12 @@ const dem::OctoMapFusion& OctoMapWorker::Fusion() const {
   return fusion_;
 }
 
+dem::OctoMapFusion& OctoMapWorker::MutableFusion() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return !queued_.has_value() && !busy_; });
+  return fusion_;
+}
+
 double OctoMapWorker::last_insert_ms() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return last_insert_ms_;

@@ -30,6 +30,9 @@ class OctoMapWorker {
   /// Waits until every queued frame is in the tree, then gives the map (for writing).
   const dem::OctoMapFusion& Fusion() const;
 
+  /// Waits until every queued frame is in the tree, then gives the map to change (restoring a
+  /// checkpoint).
+  dem::OctoMapFusion& MutableFusion();
   /// Milliseconds the last finished insertion took (for the report).
   double last_insert_ms() const;
 

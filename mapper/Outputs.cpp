@@ -12,7 +12,11 @@
 namespace rovermap::mapper {
 
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
-                            const eval::EvalOptions& eval_options) {
+                            const eval::EvalOptions& eval_options,
+                            const std::function<void(const std::string&)>& after_file) {
+  const auto done = [&](const char* name) {
+    if (after_file) after_file(name);
+  };
   const auto start = std::chrono::steady_clock::now();
   const std::vector<FrameResult>& results = mapper.results();
 
@@ -33,10 +37,14 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   drawn.push_back(std::move(odometry_xy));
   drawn.push_back(std::move(registered_xy));
   io::WriteTum(out_dir / "trajectory.tum", trajectory);
+  done("trajectory.tum");
   io::WriteTum(out_dir / "odometry.tum", odometry);
+  done("odometry.tum");
   io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
+  done("drift.csv");
 
   io::WriteDemGeoTiff(out_dir / "dem.tif", mapper.elevation_map(), mapper.georeference());
+  done("dem.tif");
   if (const octomap::OcTree* tree = mapper.octomap().tree()) {
     io::WriteOctoMap(out_dir / "map.bt", *tree);
     if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
@@ -50,6 +58,7 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
   const nlohmann::json summary = Summary(mapper, run, drift);
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
+  done("summary.json");
   return summary;
 }
 

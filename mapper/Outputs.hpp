@@ -2,6 +2,8 @@
 // The replay / serve output set (DESIGN §6), each file written atomically.
 
 #include <filesystem>
+#include <functional>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "eval/EvalOptions.hpp"
@@ -15,9 +17,11 @@ namespace rovermap::mapper {
 /// `out_dir` (an existing directory), each through a temporary file and a rename, so a reader
 /// sees the previous version or the new one, never a partial file. `run.write_ms` is measured
 /// here; `run.peak_rss_mb` is taken here when 0.
-/// @return the summary written.
+/// `after_file`, when given, is called with each file name once it is in place (the daemon's
+/// fault injection). @return the summary written.
 /// @throw io::IoError naming the file that could not be written.
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
-                            const eval::EvalOptions& eval_options);
+                            const eval::EvalOptions& eval_options,
+                            const std::function<void(const std::string&)>& after_file = {});
 
 }  // namespace rovermap::mapper

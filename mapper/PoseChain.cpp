@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <string>
 
 namespace rovermap::mapper {
@@ -71,6 +72,14 @@ PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
   first.T_world_body = T_world_body0_odom;
   first.T_world_body_odom = T_world_body0_odom;
   steps_.push_back(first);
+}
+
+PoseChain::PoseChain(std::vector<ChainStep> steps) : steps_(std::move(steps)) {
+  if (steps_.empty()) throw std::invalid_argument("PoseChain: no steps to restore");
+  for (const ChainStep& step : steps_) {
+    path_length_m_ += step.used_increment.translation().norm();
+    if (step.fallback) ++fallbacks_;
+  }
 }
 
 Eigen::Isometry3d PoseChain::PredictIncrement(const Eigen::Isometry3d& T_world_body_odom) const {

@@ -82,6 +82,10 @@ class PoseChain {
   /// @throw std::invalid_argument if `T_world_body0_odom` is not IsFiniteRigid.
   explicit PoseChain(const Eigen::Isometry3d& T_world_body0_odom);
 
+  /// A chain as saved (mapper/Checkpoint): `steps` as steps() gave them, frame 0 first; the
+  /// counters are recomputed as Add kept them. @throw std::invalid_argument if `steps` is empty.
+  explicit PoseChain(std::vector<ChainStep> steps);
+
   /// Dead-reckoning increment from the last frame to a frame at `T_world_body_odom`: the
   /// registration seed T_prev_curr. Never fails (non-finite input gives non-finite output).
   Eigen::Isometry3d PredictIncrement(const Eigen::Isometry3d& T_world_body_odom) const;

@@ -1,0 +1,593 @@
+#include "mapper/Checkpoint.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <system_error>
+#include <type_traits>
+#include <utility>
+
+#include "io/FileUtil.hpp"
+#include "io/IoError.hpp"
+
+namespace rovermap::mapper {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '1'};
+constexpr std::uint32_t kRecordMagic = 0x314A4D52;  // "RMJ1"
+constexpr const char* kSnapshotName = "state.bin";
+constexpr const char* kJournalName = "journal.bin";
+
+// Plain values appended in the machine's byte order: the checkpoint is read back by the
+// machine that wrote it.
+class Writer {
+ public:
+  template <typename T>
+  void Put(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    data_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+  }
+  void Bytes(const void* data, std::size_t size) {
+    Put<std::uint64_t>(size);
+    data_.append(static_cast<const char*>(data), size);
+  }
+  void String(std::string_view s) { Bytes(s.data(), s.size()); }
+  template <typename Derived>
+  void Matrix(const Eigen::MatrixBase<Derived>& m) {
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) Put<double>(m(r, c));
+  }
+  void Pose(const Eigen::Isometry3d& T) { Matrix(T.matrix()); }
+  void OptionalPose(const std::optional<Eigen::Isometry3d>& T) {
+    Put<std::uint8_t>(T ? 1 : 0);
+    if (T) Pose(*T);
+  }
+  std::string& data() { return data_; }
+
+ private:
+  std::string data_;
+};
+
+// Reads what Writer wrote; running past the end is a damaged file.
+class Reader {
+ public:
+  Reader(std::string_view data, std::string what) : data_(data), what_(std::move(what)) {}
+  template <typename T>
+  T Get() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    T value;
+    std::memcpy(&value, Take(sizeof(T)), sizeof(T));
+    return value;
+  }
+  std::string_view Bytes() {
+    const auto size = Get<std::uint64_t>();
+    if (size > data_.size() - offset_) Fail();
+    return {Take(size), static_cast<std::size_t>(size)};
+  }
+  std::string String() { return std::string(Bytes()); }
+  template <typename M>
+  void Matrix(M* m) {
+    for (Eigen::Index r = 0; r < m->rows(); ++r)
+      for (Eigen::Index c = 0; c < m->cols(); ++c) (*m)(r, c) = Get<double>();
+  }
+  Eigen::Isometry3d Pose() {
+    Eigen::Isometry3d T;
+    Matrix(&T.matrix());
+    return T;
+  }
+  std::optional<Eigen::Isometry3d> OptionalPose() {
+    if (Get<std::uint8_t>() == 0) return std::nullopt;
+    return Pose();
+  }
+  std::size_t Count(std::size_t max) {
+    const auto n = Get<std::uint64_t>();
+    if (n > max) Fail();
+    return static_cast<std::size_t>(n);
+  }
+  bool AtEnd() const { return offset_ == data_.size(); }
+  std::size_t left() const { return data_.size() - offset_; }
+  [[noreturn]] void Fail() const {
+    throw CheckpointError(what_ + ": damaged (truncated or malformed)");
+  }
+
+ private:
+  const char* Take(std::size_t n) {
+    if (n > data_.size() - offset_) Fail();
+    const char* p = data_.data() + offset_;
+    offset_ += n;
+    return p;
+  }
+  std::string_view data_;
+  std::string what_;
+  std::size_t offset_ = 0;
+};
+
+void PutStep(Writer* w, const ChainStep& s) {
+  w->Put<std::uint64_t>(s.index);
+  w->Pose(s.T_world_body);
+  w->Pose(s.T_world_body_odom);
+  w->Pose(s.odom_increment);
+  w->Pose(s.used_increment);
+  w->Pose(s.increment_correction);
+  w->Pose(s.cumulative_correction);
+  w->Put<std::uint8_t>(s.fallback ? 1 : 0);
+  w->Matrix(s.covariance);
+}
+
+ChainStep GetStep(Reader* r) {
+  ChainStep s;
+  s.index = r->Get<std::uint64_t>();
+  s.T_world_body = r->Pose();
+  s.T_world_body_odom = r->Pose();
+  s.odom_increment = r->Pose();
+  s.used_increment = r->Pose();
+  s.increment_correction = r->Pose();
+  s.cumulative_correction = r->Pose();
+  s.fallback = r->Get<std::uint8_t>() != 0;
+  r->Matrix(&s.covariance);
+  return s;
+}
+
+void PutResult(Writer* w, const FrameResult& f) {
+  w->Put<std::uint64_t>(f.index);
+  w->Put<double>(f.timestamp);
+  w->Put<std::int32_t>(static_cast<std::int32_t>(f.status));
+  w->Put<std::int32_t>(static_cast<std::int32_t>(f.fallback_reason));
+  w->String(f.detail);
+  PutStep(w, f.step);
+  w->OptionalPose(f.T_world_body_truth);
+  w->Put<std::uint32_t>(f.odometry_directions);
+  w->String(f.matcher_status);
+  w->Put<std::int32_t>(f.iterations);
+  w->Put<std::uint64_t>(f.inliers);
+  w->Put<double>(f.inlier_ratio);
+  w->Put<double>(f.rms_m);
+  w->Put<double>(f.conditioning);
+  w->Put<std::uint64_t>(f.points);
+  w->Put<std::uint64_t>(f.outliers_removed);
+  w->Put<std::uint64_t>(f.dropped_nonfinite);
+  const dem::FusionStats& d = f.dem;
+  for (std::size_t v :
+       {d.points, d.fused, d.candidate, d.swapped, d.rejected_outliers, d.dropped_nonfinite,
+        d.dropped_out_of_grid, d.dropped_imprecise, d.new_tiles}) {
+    w->Put<std::uint64_t>(v);
+  }
+  const StageTimes& t = f.time;
+  for (double v : {t.load_ms, t.stereo_ms, t.prepare_ms, t.register_ms, t.fuse_dem_ms,
+                   t.fuse_octomap_ms, t.total_ms}) {
+    w->Put<double>(v);
+  }
+  w->OptionalPose(f.T_world_body_registered);
+  w->Matrix(f.increment_covariance);
+  w->Put<double>(f.reference_distance_m);
+}
+
+FrameResult GetResult(Reader* r) {
+  FrameResult f;
+  f.index = r->Get<std::uint64_t>();
+  f.timestamp = r->Get<double>();
+  const auto status = r->Get<std::int32_t>();
+  const auto reason = r->Get<std::int32_t>();
+  if (status < 0 || status > static_cast<int>(FrameStatus::kBadFrame) || reason < 0 ||
+      reason > static_cast<int>(FallbackReason::kMissing)) {
+    r->Fail();
+  }
+  f.status = static_cast<FrameStatus>(status);
+  f.fallback_reason = static_cast<FallbackReason>(reason);
+  f.detail = r->String();
+  f.step = GetStep(r);
+  f.T_world_body_truth = r->OptionalPose();
+  f.odometry_directions = r->Get<std::uint32_t>();
+  f.matcher_status = r->String();
+  f.iterations = r->Get<std::int32_t>();
+  f.inliers = r->Get<std::uint64_t>();
+  f.inlier_ratio = r->Get<double>();
+  f.rms_m = r->Get<double>();
+  f.conditioning = r->Get<double>();
+  f.points = r->Get<std::uint64_t>();
+  f.outliers_removed = r->Get<std::uint64_t>();
+  f.dropped_nonfinite = r->Get<std::uint64_t>();
+  dem::FusionStats& d = f.dem;
+  for (std::size_t* v :
+       {&d.points, &d.fused, &d.candidate, &d.swapped, &d.rejected_outliers, &d.dropped_nonfinite,
+        &d.dropped_out_of_grid, &d.dropped_imprecise, &d.new_tiles}) {
+    *v = r->Get<std::uint64_t>();
+  }
+  StageTimes& t = f.time;
+  for (double* v : {&t.load_ms, &t.stereo_ms, &t.prepare_ms, &t.register_ms, &t.fuse_dem_ms,
+                    &t.fuse_octomap_ms, &t.total_ms}) {
+    *v = r->Get<double>();
+  }
+  f.T_world_body_registered = r->OptionalPose();
+  r->Matrix(&f.increment_covariance);
+  f.reference_distance_m = r->Get<double>();
+  return f;
+}
+
+void PutIndices(Writer* w, const std::vector<std::size_t>& v) {
+  w->Put<std::uint64_t>(v.size());
+  for (std::size_t i : v) w->Put<std::uint64_t>(i);
+}
+
+std::vector<std::size_t> GetIndices(Reader* r) {
+  std::vector<std::size_t> v(r->Count(r->left() / 8));
+  for (std::size_t& i : v) i = r->Get<std::uint64_t>();
+  return v;
+}
+
+void PutDaemon(Writer* w, const DaemonState& s) {
+  w->Put<std::uint64_t>(s.next_index);
+  PutIndices(w, s.missing);
+  PutIndices(w, s.rejected);
+}
+
+DaemonState GetDaemon(Reader* r) {
+  DaemonState s;
+  s.next_index = r->Get<std::uint64_t>();
+  s.missing = GetIndices(r);
+  s.rejected = GetIndices(r);
+  return s;
+}
+
+template <typename T>
+void PutVector(Writer* w, const std::vector<T>& v) {
+  w->Bytes(v.data(), v.size() * sizeof(T));
+}
+
+template <typename T>
+std::vector<T> GetVector(Reader* r) {
+  const std::string_view bytes = r->Bytes();
+  if (bytes.size() % sizeof(T) != 0) r->Fail();
+  std::vector<T> v(bytes.size() / sizeof(T));
+  if (!v.empty()) std::memcpy(static_cast<void*>(v.data()), bytes.data(), bytes.size());
+  return v;
+}
+
+void PutCloud(Writer* w, const registration::PointCloud& c) {
+  PutVector(w, c.points);
+  PutVector(w, c.normals);
+  PutVector(w, c.covariances);
+  PutVector(w, c.chain_ids);
+}
+
+registration::PointCloud GetCloud(Reader* r) {
+  registration::PointCloud c;
+  c.points = GetVector<Eigen::Vector3d>(r);
+  c.normals = GetVector<Eigen::Vector3d>(r);
+  c.covariances = GetVector<Eigen::Matrix3d>(r);
+  c.chain_ids = GetVector<int>(r);
+  return c;
+}
+
+// One journal record: magic, payload length, CRC-32 of the payload, payload.
+struct RecordHeader {
+  std::uint32_t magic = kRecordMagic;
+  std::uint32_t length = 0;
+  std::uint32_t crc = 0;
+};
+
+void WriteAll(int fd, const char* data, std::size_t size, const fs::path& path) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw io::IoError(path.string() + ": cannot write (" + std::strerror(errno) + ")");
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace
+
+// The Mapper's private state, written and read here only.
+struct CheckpointAccess {
+  static void Save(const Mapper& m, Writer* w) {
+    w->Put<std::uint64_t>(m.results_.size());
+    for (const FrameResult& f : m.results_) PutResult(w, f);
+    w->Put<std::uint8_t>(m.chain_ ? 1 : 0);
+    if (m.chain_) {
+      w->Put<std::uint64_t>(m.chain_->size());
+      for (const ChainStep& s : m.chain_->steps()) PutStep(w, s);
+    }
+    w->Put<double>(m.attitude_.variance());
+    w->Put<std::uint8_t>(m.reference_index_ ? 1 : 0);
+    w->Put<std::uint64_t>(m.reference_index_.value_or(0));
+    w->Put<double>(m.last_reference_distance_m_);
+    // The previous frame's cloud is not saved (a stereo frame's points with their covariances
+    // are 12 MB): restoring loads that frame from the inbox again, which gives the same points.
+    const bool previous =
+        m.previous_ && m.reference_index_ && *m.reference_index_ < m.results_.size();
+    w->Put<std::uint8_t>(previous ? 1 : 0);
+    if (previous) w->Put<std::uint64_t>(m.results_[*m.reference_index_].index);
+    w->Put<std::uint64_t>(m.local_map_.clouds().size());
+    for (const registration::PointCloud& c : m.local_map_.clouds()) PutCloud(w, c);
+
+    // The DEM: only the filled cells of each tile (a tile is mostly empty at the map's edge).
+    const dem::ElevationMap& map = m.elevation_map_;
+    const dem::CellBounds& bounds = map.bounds();
+    w->Put<std::uint8_t>(bounds.Empty() ? 0 : 1);
+    if (!bounds.Empty()) {
+      w->Put(bounds.Min());
+      w->Put(bounds.Max());
+    }
+    w->Put<std::uint64_t>(map.covariances_ignored());
+    std::vector<dem::TileIndex> tiles = map.TileIndices();
+    std::sort(tiles.begin(), tiles.end(), [](const dem::TileIndex& a, const dem::TileIndex& b) {
+      return std::make_pair(a.x, a.y) < std::make_pair(b.x, b.y);
+    });
+    w->Put<std::uint64_t>(tiles.size());
+    for (const dem::TileIndex& t : tiles) {
+      const dem::Tile* tile = map.FindTile(t);
+      w->Put(t);
+      std::vector<std::uint32_t> where;
+      std::vector<dem::CellRecord> records;
+      for (std::size_t i = 0; i < tile->cells.size(); ++i) {
+        const dem::CellRecord& c = tile->cells[i];
+        if (c.value.count == 0 && c.candidate.count == 0) continue;
+        where.push_back(static_cast<std::uint32_t>(i));
+        records.push_back(c);
+      }
+      PutVector(w, where);
+      PutVector(w, records);
+    }
+    std::ostringstream octomap(std::ios::out | std::ios::binary);
+    if (!m.octomap_.Fusion().Save(octomap)) throw CheckpointError("cannot serialise the OctoMap");
+    w->String(octomap.str());
+  }
+
+  static void Restore(Reader* r, Mapper* m,
+                      const std::function<io::Frame(std::size_t)>& read_frame) {
+    std::vector<FrameResult> results(r->Count(r->left()));
+    for (FrameResult& f : results) f = GetResult(r);
+    m->results_ = std::move(results);
+    m->chain_.reset();
+    if (r->Get<std::uint8_t>() != 0) {
+      std::vector<ChainStep> steps(r->Count(r->left()));
+      for (ChainStep& s : steps) s = GetStep(r);
+      if (steps.empty()) r->Fail();
+      m->chain_ = std::make_unique<PoseChain>(std::move(steps));
+    }
+    m->attitude_.RestoreVariance(r->Get<double>());
+    const bool has_reference = r->Get<std::uint8_t>() != 0;
+    const auto reference = r->Get<std::uint64_t>();
+    m->reference_index_ = has_reference ? std::optional<std::size_t>(reference) : std::nullopt;
+    m->last_reference_distance_m_ = r->Get<double>();
+    m->previous_.reset();
+    if (r->Get<std::uint8_t>() != 0) {
+      const auto index = r->Get<std::uint64_t>();
+      LoadedFrame loaded = LoadFrame(read_frame(index), m->sensor_, m->options_.mapper.min_points);
+      if (!loaded.ok) {
+        throw ReapplyError(
+            "frame " + std::to_string(index) +
+            ": the registration reference could be read before, not now: " + loaded.reason);
+      }
+      m->previous_ = std::make_unique<registration::IndexedCloud>(std::move(loaded.cloud),
+                                                                  m->options_.registration);
+    }
+    std::vector<registration::PointCloud> local(r->Count(r->left()));
+    for (registration::PointCloud& c : local) c = GetCloud(r);
+    m->local_map_.Restore(std::move(local));
+
+    dem::ElevationMap& map = m->elevation_map_;
+    map = dem::ElevationMap(map.options());
+    dem::CellBounds bounds;
+    if (r->Get<std::uint8_t>() != 0) {
+      bounds.Extend(r->Get<dem::CellIndex>());
+      bounds.Extend(r->Get<dem::CellIndex>());
+    }
+    map.RestoreCounters(bounds, r->Get<std::uint64_t>());
+    const auto cells_per_tile = static_cast<std::size_t>(map.options().tile_cells) *
+                                static_cast<std::size_t>(map.options().tile_cells);
+    const std::size_t tiles = r->Count(r->left());
+    for (std::size_t k = 0; k < tiles; ++k) {
+      const auto t = r->Get<dem::TileIndex>();
+      const std::vector<std::uint32_t> where = GetVector<std::uint32_t>(r);
+      const std::vector<dem::CellRecord> records = GetVector<dem::CellRecord>(r);
+      if (where.size() != records.size()) r->Fail();
+      std::vector<dem::CellRecord> cells(cells_per_tile);
+      for (std::size_t i = 0; i < where.size(); ++i) {
+        if (where[i] >= cells.size()) r->Fail();
+        cells[where[i]] = records[i];
+      }
+      map.RestoreTile(t, std::move(cells));
+    }
+    std::istringstream octomap(r->String(), std::ios::in | std::ios::binary);
+    try {
+      m->octomap_.MutableFusion().Restore(octomap);
+    } catch (const std::runtime_error& e) {
+      throw CheckpointError(std::string("checkpoint: ") + e.what());
+    }
+  }
+};
+
+namespace {
+
+// FNV-1a, 64 bits: the fingerprint as every record carries it.
+std::string Digest(std::string_view text) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : text) {
+    h ^= static_cast<std::uint8_t>(c);
+    h *= 0x100000001b3ULL;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+}  // namespace
+
+Checkpoint::Checkpoint(fs::path directory, std::string fingerprint, FaultHook hook)
+    : directory_(std::move(directory)), fingerprint_(Digest(fingerprint)), hook_(std::move(hook)) {
+  std::error_code ec;
+  fs::create_directories(directory_, ec);
+  if (ec) throw io::IoError(directory_.string() + ": cannot create (" + ec.message() + ")");
+  // Temporaries of a snapshot a kill interrupted.
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory_, ec)) {
+    if (entry.path().filename().string().rfind(std::string(kSnapshotName) + ".tmp-", 0) == 0) {
+      fs::remove(entry.path(), ec);
+    }
+  }
+}
+
+bool Checkpoint::Exists() const {
+  std::error_code ec;
+  return fs::exists(directory_ / kSnapshotName, ec) || fs::exists(directory_ / kJournalName, ec);
+}
+
+DaemonState Checkpoint::Restore(Mapper* mapper,
+                                const std::function<io::Frame(std::size_t)>& read_frame) {
+  DaemonState state;
+  std::error_code ec;
+  const fs::path snapshot = directory_ / kSnapshotName;
+  if (fs::exists(snapshot, ec)) {
+    const std::string data = io::ReadWholeFile(snapshot);
+    snapshot_bytes_ = data.size();
+    Reader r(data, snapshot.string());
+    if (data.size() < sizeof(kSnapshotMagic) + 4 ||
+        std::memcmp(data.data(), kSnapshotMagic, sizeof(kSnapshotMagic)) != 0) {
+      throw CheckpointError(snapshot.string() + ": not a rovermap checkpoint");
+    }
+    std::uint32_t crc = 0;
+    std::memcpy(&crc, data.data() + data.size() - 4, 4);
+    if (Crc32(std::string_view(data).substr(0, data.size() - 4)) != crc) {
+      throw CheckpointError(snapshot.string() + ": damaged (checksum mismatch)");
+    }
+    Reader body(std::string_view(data).substr(sizeof(kSnapshotMagic), data.size() - 12),
+                snapshot.string());
+    if (body.String() != fingerprint_) {
+      throw CheckpointError(snapshot.string() +
+                            ": made with another configuration or sequence.yaml; restart with "
+                            "the same ones, or remove " +
+                            directory_.string() + " to start over");
+    }
+    state = GetDaemon(&body);
+    CheckpointAccess::Restore(&body, mapper, read_frame);
+    if (!body.AtEnd()) body.Fail();
+  }
+
+  // The journal: records up to the first torn or damaged one, which a kill left.
+  const fs::path journal = directory_ / kJournalName;
+  journal_records_ = 0;
+  reapplied_ = 0;
+  if (!fs::exists(journal, ec)) return state;
+  const std::string data = io::ReadWholeFile(journal);
+  std::size_t offset = 0;
+  while (data.size() - offset >= sizeof(RecordHeader)) {
+    RecordHeader header;
+    std::memcpy(&header, data.data() + offset, sizeof(header));
+    if (header.magic != kRecordMagic || header.length > data.size() - offset - sizeof(header))
+      break;
+    const std::string_view payload(data.data() + offset + sizeof(header), header.length);
+    if (Crc32(payload) != header.crc) break;
+    Reader r(payload, journal.string());
+    if (r.String() != fingerprint_) {
+      throw CheckpointError(journal.string() +
+                            ": made with another configuration or sequence.yaml; restart with "
+                            "the same ones, or remove " +
+                            directory_.string() + " to start over");
+    }
+    const DaemonState after = GetDaemon(&r);
+    std::optional<FrameResult> frame;
+    if (r.Get<std::uint8_t>() != 0) frame = GetResult(&r);
+    offset += sizeof(header) + header.length;
+    ++journal_records_;
+    if (after.next_index <= state.next_index) continue;  // already in the snapshot
+    ++reapplied_;
+    if (frame) {
+      if (frame->status == FrameStatus::kBadFrame) {
+        mapper->Reapply(*frame, nullptr);
+      } else {
+        const io::Frame read = read_frame(frame->index);
+        mapper->Reapply(*frame, &read);
+      }
+    }
+    state = after;
+  }
+  if (offset != data.size()) {
+    // Cut the torn tail so that the next record follows the last good one.
+    if (::truncate(journal.c_str(), static_cast<off_t>(offset)) != 0) {
+      throw io::IoError(journal.string() + ": cannot truncate (" + std::strerror(errno) + ")");
+    }
+  }
+  return state;
+}
+
+void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
+  Writer w;
+  w.String(fingerprint_);
+  PutDaemon(&w, after);
+  w.Put<std::uint8_t>(frame ? 1 : 0);
+  if (frame) PutResult(&w, *frame);
+  RecordHeader header;
+  header.length = static_cast<std::uint32_t>(w.data().size());
+  header.crc = Crc32(w.data());
+
+  const fs::path journal = directory_ / kJournalName;
+  const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
+  if (fd < 0) throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  try {
+    WriteAll(fd, reinterpret_cast<const char*>(&header), sizeof(header), journal);
+    Fault("journal:partial");
+    WriteAll(fd, w.data().data(), w.data().size(), journal);
+    if (::fdatasync(fd) != 0) {
+      throw io::IoError(journal.string() + ": cannot flush (" + std::strerror(errno) + ")");
+    }
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  ++journal_records_;
+}
+
+void Checkpoint::Save(const Mapper& mapper, const DaemonState& state) {
+  Writer w;
+  w.data().append(kSnapshotMagic, sizeof(kSnapshotMagic));
+  w.String(fingerprint_);
+  PutDaemon(&w, state);
+  CheckpointAccess::Save(mapper, &w);
+  w.Put<std::uint32_t>(Crc32(w.data()));
+  snapshot_bytes_ = w.data().size();
+
+  const fs::path snapshot = directory_ / kSnapshotName;
+  const fs::path temp = io::WriteTemporaryFile(snapshot, w.data());
+  Fault("checkpoint:written");
+  io::CommitTemporaryFile(temp, snapshot);
+  io::SyncDirectory(directory_);
+  Fault("checkpoint:renamed");
+  // The snapshot holds every journalled frame now.
+  const fs::path journal = directory_ / kJournalName;
+  if (::truncate(journal.c_str(), 0) != 0 && errno != ENOENT) {
+    throw io::IoError(journal.string() + ": cannot truncate (" + std::strerror(errno) + ")");
+  }
+  journal_records_ = 0;
+}
+
+std::uint32_t Crc32(std::string_view data) {
+  static const std::array<std::uint32_t, 256> table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1U) ? 0xEDB88320U ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  std::uint32_t crc = 0xFFFFFFFFU;
+  for (const char ch : data) {
+    crc = table[(crc ^ static_cast<std::uint8_t>(ch)) & 0xFFU] ^ (crc >> 8);
+  }
+  return crc ^ 0xFFFFFFFFU;
+}
+
+}  // namespace rovermap::mapper

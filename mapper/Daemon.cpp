@@ -1,0 +1,343 @@
+#include "mapper/Daemon.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <system_error>
+#include <utility>
+
+#include "io/DirectoryWatcher.hpp"
+#include "io/FileUtil.hpp"
+#include "io/IoError.hpp"
+#include "mapper/DriftReport.hpp"
+#include "mapper/Outputs.hpp"
+
+namespace rovermap::mapper {
+namespace {
+
+namespace fs = std::filesystem;
+
+double MsBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
+
+bool Contains(const std::vector<std::size_t>& v, std::size_t x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+}  // namespace
+
+Daemon::Daemon(DaemonSetup setup) : setup_(std::move(setup)), inbox_(setup_.inbox) {
+  std::error_code ec;
+  fs::create_directories(setup_.out, ec);
+  if (ec) throw io::IoError(setup_.out.string() + ": cannot create (" + ec.message() + ")");
+  const fs::path lock = setup_.out / "serve.lock";
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (lock_fd_ < 0) {
+    throw io::IoError(lock.string() + ": cannot open (" + std::strerror(errno) + ")");
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    char pid[32] = {0};
+    const ssize_t n = ::pread(lock_fd_, pid, sizeof(pid) - 1, 0);
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    std::string holder(pid, n > 0 ? static_cast<std::size_t>(n) : 0);
+    holder.erase(holder.find_last_not_of(" \n") + 1);
+    throw DaemonBusyError(setup_.out.string() + ": already served by rovermap serve (pid " +
+                          (holder.empty() ? "unknown" : holder) + ", lock " + lock.string() + ")");
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(lock_fd_, 0) != 0 || ::pwrite(lock_fd_, pid.data(), pid.size(), 0) < 0) {
+    throw io::IoError(lock.string() + ": cannot write the pid (" + std::strerror(errno) + ")");
+  }
+}
+
+Daemon::~Daemon() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+}
+
+bool Daemon::WaitForSequence(const std::atomic<int>& stop) {
+  const ServeOptions& o = setup_.serve;
+  // sequence.yaml comes first; a daemon may be started before the rover's producer.
+  {
+    io::DirectoryWatcher watcher(inbox_.directory(), o.use_inotify);
+    bool said = false;
+    while (!fs::exists(inbox_.sequence_yaml())) {
+      if (stop.load() != 0) return false;
+      if (!said) Log("serve: waiting for " + inbox_.sequence_yaml().string());
+      said = true;
+      watcher.Wait(watcher.watching() ? std::min(o.poll_interval_s, 0.2) : o.poll_interval_s);
+    }
+  }
+  sequence_ = io::ReadSequenceInfo(inbox_.directory());
+  sequence_text_ = io::ReadWholeFile(inbox_.sequence_yaml());
+  mapper_ = std::make_unique<Mapper>(sequence_, setup_.pipeline);
+  return true;
+}
+
+void Daemon::Resume() {
+  checkpoint_ = std::make_unique<Checkpoint>(
+      setup_.out / "checkpoint", setup_.config_text + "\n--- sequence.yaml\n" + sequence_text_,
+      setup_.fault);
+  // The snapshot, then the journalled frames re-applied (not registered again).
+  if (checkpoint_->Exists()) {
+    const auto start = Clock::now();
+    const std::map<std::size_t, io::InboxFrameFiles> files = inbox_.Scan();
+    state_ = checkpoint_->Restore(mapper_.get(), [&](std::size_t index) {
+      const auto it = files.find(index);
+      if (it == files.end()) {
+        throw io::IoError((inbox_.frames_dir() / io::FrameStem(index)).string() +
+                          ".*: journalled frame no longer in the inbox; the checkpoint needs it");
+      }
+      return inbox_.Read(index, it->second, sequence_);
+    });
+    restart_ms_ = MsBetween(start, Clock::now());
+    if (!mapper_->results().empty()) last_timestamp_ = mapper_->results().back().timestamp;
+    std::ostringstream line;
+    line << "serve: resumed at frame " << state_.next_index << " (" << checkpoint_->reapplied()
+         << " journalled steps re-applied) in " << std::fixed << std::setprecision(0) << restart_ms_
+         << " ms";
+    Log(line.str());
+    since_checkpoint_ = static_cast<int>(checkpoint_->journal_records());
+    // Rejections a kill interrupted: the reason is already there, move the rest.
+    for (const auto& [index, present] : files) {
+      if (index < state_.next_index && Contains(state_.rejected, index)) {
+        inbox_.Reject(index, "rejected (see drift.csv and the daemon's log)");
+      }
+    }
+  }
+}
+
+void Daemon::Run(const std::atomic<int>& stop) {
+  const ServeOptions& o = setup_.serve;
+  io::DirectoryWatcher watcher(inbox_.frames_dir(), o.use_inotify);
+  WriteStatus("running", 0);
+  while (stop.load() == 0) {
+    const std::map<std::size_t, io::InboxFrameFiles> files = inbox_.Scan();
+    waiting_ = 0;
+    for (const auto& [index, present] : files) {
+      if (index >= state_.next_index && present.Complete(sequence_.sensor_type)) ++waiting_;
+    }
+    if (Step(files)) continue;
+    double wait_s = watcher.watching() ? std::min(o.poll_interval_s, 0.2) : o.poll_interval_s;
+    if (gap_since_) {
+      const double left_s = o.gap_timeout_s - MsBetween(*gap_since_, Clock::now()) / 1000.0;
+      wait_s = std::clamp(left_s, 0.0, wait_s);
+    }
+    watcher.Wait(wait_s);
+  }
+  // Signalled: the frame in hand is done; publish and checkpoint what there is.
+  if (since_checkpoint_ > 0 || !fs::exists(checkpoint_->directory() / "state.bin")) {
+    checkpoint_->Save(*mapper_, state_);
+    since_checkpoint_ = 0;
+  }
+  Publish();
+  WriteStatus("stopped", waiting_);
+  Log("serve: stopped after frame " + std::to_string(state_.next_index) + " (" +
+      std::to_string(processed_) + " frames this run)");
+}
+
+bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
+  RejectLate(files);
+  const std::size_t next = state_.next_index;
+  const auto it = files.find(next);
+  if (it != files.end() && it->second.Complete(sequence_.sensor_type)) {
+    gap_since_.reset();
+    ProcessIndex(next, it->second);
+    return true;
+  }
+  // The queue is held only by a later frame that is ready.
+  const bool held = std::any_of(files.upper_bound(next), files.end(), [&](const auto& entry) {
+    return entry.second.Complete(sequence_.sensor_type);
+  });
+  if (!held) {
+    gap_since_.reset();
+    return false;
+  }
+  if (!gap_since_) {
+    gap_since_ = Clock::now();
+    Log("serve: frame " + std::to_string(next) + " holds the queue; declared missing after " +
+        std::to_string(setup_.serve.gap_timeout_s) + " s");
+  }
+  if (MsBetween(*gap_since_, Clock::now()) < 1000.0 * setup_.serve.gap_timeout_s) return false;
+  gap_since_.reset();
+  DeclareMissing(next, it != files.end() ? &it->second : nullptr);
+  return true;
+}
+
+void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files) {
+  const auto start = Clock::now();
+  io::Frame frame;
+  std::optional<std::string> unreadable;
+  try {
+    frame = inbox_.Read(index, files, sequence_);
+  } catch (const io::IoError& e) {
+    unreadable = e.what();
+  }
+  // Without a usable odometry line the frame has no pose at all.
+  std::optional<std::string> no_pose;
+  if (unreadable) {
+    try {
+      frame = inbox_.ReadPoses(index, files);
+    } catch (const io::IoError& e) {
+      no_pose = e.what();
+    }
+  }
+  if (!no_pose && frame.timestamp <= last_timestamp_) {
+    std::ostringstream why;
+    why << (inbox_.frames_dir() / io::FrameStem(index)).string() << ".odom: timestamp "
+        << std::setprecision(17) << frame.timestamp << " is not after the previous frame's "
+        << last_timestamp_;
+    no_pose = why.str();
+  }
+  if (no_pose) {
+    state_.rejected.push_back(index);
+    ++state_.next_index;
+    checkpoint_->Append(nullptr, state_);
+    inbox_.Reject(index, *no_pose);
+    Log("serve: frame " + std::to_string(index) + " rejected, not in the trajectory: " + *no_pose);
+    return;
+  }
+  const double load_ms = MsBetween(start, Clock::now());
+  const FrameResult result =
+      unreadable
+          ? mapper_->SkipFrame(index, frame.timestamp, frame.T_world_body_odom,
+                               FallbackReason::kBadFrame, *unreadable, frame.T_world_body_truth)
+          : mapper_->ProcessFrame(frame, load_ms);
+  Fault("frame:processed");
+  last_timestamp_ = frame.timestamp;
+  const bool bad = result.status == FrameStatus::kBadFrame;
+  if (bad) state_.rejected.push_back(index);
+  ++state_.next_index;
+  Commit(&result, bad ? result.detail : std::string());
+  busy_ms_ += MsBetween(start, Clock::now());
+}
+
+void Daemon::DeclareMissing(std::size_t index, const io::InboxFrameFiles* files) {
+  const std::string why = "missing: frame " + std::to_string(index) + " incomplete after " +
+                          std::to_string(setup_.serve.gap_timeout_s) + " s (serve.gap_timeout_s)";
+  // Its odometry line, if it came, still places it in the trajectory.
+  std::optional<io::Frame> poses;
+  if (files != nullptr && files->odom) {
+    try {
+      poses = inbox_.ReadPoses(index, *files);
+      if (poses->timestamp <= last_timestamp_) poses.reset();
+    } catch (const io::IoError&) {
+      poses.reset();
+    }
+  }
+  if (poses) {
+    const FrameResult result =
+        mapper_->SkipFrame(index, poses->timestamp, poses->T_world_body_odom,
+                           FallbackReason::kMissing, why, poses->T_world_body_truth);
+    last_timestamp_ = poses->timestamp;
+    state_.rejected.push_back(index);
+    ++state_.next_index;
+    Commit(&result, why);
+    return;
+  }
+  state_.missing.push_back(index);
+  ++state_.next_index;
+  checkpoint_->Append(nullptr, state_);
+  if (files != nullptr) inbox_.Reject(index, why);
+  Log("serve: frame " + std::to_string(index) + " " + why + "; not in the trajectory");
+}
+
+// Journal first (the frame is done once it is on disk), then the side effects a restart can
+// redo: the rejected files, the snapshot, the outputs.
+void Daemon::Commit(const FrameResult* result, const std::string& reject_reason) {
+  checkpoint_->Append(result, state_);
+  if (!reject_reason.empty()) inbox_.Reject(result->index, reject_reason);
+  ++processed_;
+  last_frame_time_ = UtcNow();
+  std::ostringstream line;
+  line << "serve: frame " << result->index << " " << ToString(result->status);
+  if (result->fallback_reason != FallbackReason::kNone &&
+      result->fallback_reason != FallbackReason::kFirstFrame) {
+    line << " (" << ToString(result->fallback_reason);
+    if (!result->detail.empty()) line << ": " << result->detail;
+    line << ")";
+  }
+  line << std::fixed << std::setprecision(0) << ", " << result->time.load_ms + result->time.total_ms
+       << " ms, " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
+  Log(line.str());
+  if (++since_checkpoint_ >= setup_.serve.checkpoint_every) {
+    checkpoint_->Save(*mapper_, state_);
+    since_checkpoint_ = 0;
+  }
+  if (++since_publish_ >= setup_.serve.publish_every) Publish();
+  WriteStatus("running", waiting_ > 0 ? waiting_ - 1 : 0);
+}
+
+void Daemon::RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files) {
+  for (const auto& [index, present] : files) {
+    if (index >= state_.next_index) break;
+    if (Contains(state_.missing, index)) {
+      inbox_.Reject(index, "arrived after frame " + std::to_string(index) +
+                               " was declared missing (serve.gap_timeout_s)");
+      Log("serve: frame " + std::to_string(index) + " arrived late, rejected");
+    } else if (Contains(state_.rejected, index) && (present.left || present.right || present.ply)) {
+      inbox_.Reject(index, "rejected (see drift.csv and the daemon's log)");
+    }
+  }
+}
+
+void Daemon::Publish() {
+  since_publish_ = 0;
+  if (mapper_->results().empty()) return;
+  RunInfo run;
+  run.sequence = setup_.inbox.string();
+  // Frames per second over the frames' own processing time: the daemon idles between frames.
+  for (const FrameResult& r : mapper_->results()) run.wall_ms += r.time.load_ms + r.time.total_ms;
+  run.extra["serve"] = {{"missing_frames", state_.missing},
+                        {"rejected_frames", state_.rejected},
+                        {"next_frame", state_.next_index},
+                        {"restart_ms", restart_ms_}};
+  WriteOutputs(setup_.out, *mapper_, run, setup_.eval,
+               [this](const std::string& file) { Fault("publish:" + file); });
+}
+
+void Daemon::WriteStatus(const char* state, std::size_t waiting) {
+  std::size_t fallbacks = 0;
+  for (const FrameResult& r : mapper_->results()) {
+    fallbacks += r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame ? 1 : 0;
+  }
+  const nlohmann::json status = {
+      {"state", state},
+      {"pid", ::getpid()},
+      {"inbox", setup_.inbox.string()},
+      {"last_frame", mapper_->results().empty() ? nlohmann::json(nullptr)
+                                                : nlohmann::json(mapper_->results().back().index)},
+      {"next_frame", state_.next_index},
+      {"frames_done", mapper_->results().size()},
+      {"frames_waiting", waiting},
+      {"frames_per_second",
+       busy_ms_ > 0.0 ? 1000.0 * static_cast<double>(processed_) / busy_ms_ : 0.0},
+      {"fallbacks", fallbacks},
+      {"rejected", state_.rejected.size()},
+      {"missing", state_.missing},
+      {"last_frame_time",
+       last_frame_time_.empty() ? nlohmann::json(nullptr) : nlohmann::json(last_frame_time_)},
+      {"restart_ms", restart_ms_},
+      {"updated", UtcNow()}};
+  io::WriteFileAtomically(setup_.out / "status.json", status.dump(2) + "\n");
+}
+
+}  // namespace rovermap::mapper

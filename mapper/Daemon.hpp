@@ -1,0 +1,107 @@
+#pragma once
+// `rovermap serve` (DESIGN §7): frames taken from an inbox as they arrive, in index order,
+// through the same Mapper as replay; the outputs of §6 published every few frames, status.json
+// after every frame, and every frame journalled (mapper/Checkpoint) before it counts as done,
+// so that a restart after `kill -9` resumes where the run stopped.
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "eval/EvalOptions.hpp"
+#include "io/Inbox.hpp"
+#include "mapper/Checkpoint.hpp"
+#include "mapper/Mapper.hpp"
+#include "mapper/ServeOptions.hpp"
+
+namespace rovermap::mapper {
+
+/// Another daemon holds the output directory's lock.
+class DaemonBusyError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DaemonSetup {
+  std::filesystem::path inbox;
+  std::filesystem::path out;
+  PipelineOptions pipeline;
+  ServeOptions serve;
+  eval::EvalOptions eval;
+  /// The effective configuration as text: with sequence.yaml, what a checkpoint must have been
+  /// made with.
+  std::string config_text;
+  /// One line per frame and per event (the command prints them on stderr).
+  std::function<void(const std::string&)> log;
+  /// Test hook: called at named points ("frame:processed", "publish:<file>", and Checkpoint's).
+  FaultHook fault;
+};
+
+class Daemon {
+ public:
+  /// Creates OUT and takes its lock (OUT/serve.lock, flock), holding it until destroyed.
+  /// @throw DaemonBusyError naming the pid of the daemon that holds it; io::IoError if OUT
+  ///        cannot be created.
+  explicit Daemon(DaemonSetup setup);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  /// Waits for the inbox's sequence.yaml and reads it. @return false if `stop` turned non-zero
+  /// first. @throw io::IoError for an unreadable or invalid sequence.yaml (naming file and line);
+  /// std::invalid_argument for options the Mapper refuses.
+  bool WaitForSequence(const std::atomic<int>& stop);
+  /// Restores the checkpoint in OUT, if any (after WaitForSequence).
+  /// @throw CheckpointError if it was made with another configuration or is damaged;
+  ///        ReapplyError / io::IoError if a journalled frame cannot be re-applied.
+  void Resume();
+  /// Processes frames until `stop` turns non-zero; then the frame in hand is finished, the
+  /// state checkpointed and the outputs published before it returns (after Resume).
+  /// @throw io::IoError if OUT cannot be written.
+  void Run(const std::atomic<int>& stop);
+
+  /// How long restoring the checkpoint took [ms] (0 before Run, or without a checkpoint).
+  double restart_ms() const { return restart_ms_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  bool Step(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files);
+  void DeclareMissing(std::size_t index, const io::InboxFrameFiles* files);
+  void Commit(const FrameResult* result, const std::string& reject_reason);
+  void RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  void Publish();
+  void WriteStatus(const char* state, std::size_t waiting);
+  void Log(const std::string& line) const {
+    if (setup_.log) setup_.log(line);
+  }
+  void Fault(std::string_view point) const {
+    if (setup_.fault) setup_.fault(point);
+  }
+
+  DaemonSetup setup_;
+  io::Inbox inbox_;
+  int lock_fd_ = -1;
+  io::SequenceInfo sequence_;
+  std::string sequence_text_;
+  std::unique_ptr<Mapper> mapper_;
+  std::unique_ptr<Checkpoint> checkpoint_;
+  DaemonState state_;
+  std::optional<Clock::time_point> gap_since_;
+  int since_publish_ = 0;
+  int since_checkpoint_ = 0;
+  std::size_t processed_ = 0;  // frames this session
+  double busy_ms_ = 0.0;       // time spent on them
+  double restart_ms_ = 0.0;
+  double last_timestamp_ = -1e300;
+  std::string last_frame_time_;  // UTC, ISO 8601
+  std::size_t waiting_ = 0;
+};
+
+}  // namespace rovermap::mapper
