@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "dem/QuietStderr.hpp"
+
 namespace rovermap::dem {
 namespace {
 
@@ -91,7 +93,11 @@ void OctoMapFusion::Restore(std::istream& in) {
   in.read(reinterpret_cast<char*>(schedule), sizeof(schedule));
   if (!in) throw std::runtime_error("OctoMap state: truncated");
   if (options_.enabled) {
-    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
+    std::unique_ptr<octomap::AbstractOcTree> read;
+    {
+      const QuietStderr quiet;  // liboctomap reports the read on stderr
+      read.reset(octomap::AbstractOcTree::read(in));
+    }
     auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
     if (tree == nullptr) throw std::runtime_error("OctoMap state: not an OcTree");
     if (tree->getResolution() != options_.resolution_m) {

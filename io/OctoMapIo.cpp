@@ -1,12 +1,10 @@
 #include "io/OctoMapIo.hpp"
 
-#include <fcntl.h>
 #include <octomap/AbstractOcTree.h>
-#include <unistd.h>
 
-#include <cstdio>
 #include <sstream>
 
+#include "dem/QuietStderr.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 
@@ -17,17 +15,8 @@ void WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree
   const std::string ext = path.extension().string();
   bool ok = false;
   if (ext == ".bt") {
-    // Debian's liboctomap prints " done." on stderr after a binary write (its debug output is
-    // compiled in); library code here never prints, so stderr points at /dev/null meanwhile.
-    std::fflush(stderr);
-    const int saved = ::dup(2);
-    const int null = ::open("/dev/null", O_WRONLY);
-    if (saved >= 0 && null >= 0) ::dup2(null, 2);
+    const dem::QuietStderr quiet;  // liboctomap prints " done." after a binary write
     ok = tree.writeBinaryConst(stream);
-    std::fflush(stderr);
-    if (saved >= 0 && null >= 0) ::dup2(saved, 2);
-    if (null >= 0) ::close(null);
-    if (saved >= 0) ::close(saved);
   } else if (ext == ".ot") {
     ok = tree.write(stream);
   } else {
@@ -50,10 +39,15 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::filesystem::path& path) 
   std::istringstream stream(data, std::ios::in | std::ios::binary);
   if (ext == ".bt") {
     auto tree = std::make_unique<octomap::OcTree>(0.1);
+    const dem::QuietStderr quiet;
     if (!tree->readBinary(stream)) throw IoError(path.string() + ": not an OctoMap .bt file");
     return tree;
   }
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(stream));
+  std::unique_ptr<octomap::AbstractOcTree> tree;
+  {
+    const dem::QuietStderr quiet;
+    tree.reset(octomap::AbstractOcTree::read(stream));
+  }
   auto* octree = dynamic_cast<octomap::OcTree*>(tree.get());
   if (octree == nullptr) throw IoError(path.string() + ": not an OctoMap OcTree file");
   tree.release();
