@@ -276,13 +276,20 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
     line << ")";
   }
   line << std::fixed << std::setprecision(0) << ", " << result->time.load_ms + result->time.total_ms
-       << " ms, " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
-  Log(line.str());
+       << " ms";
   if (++since_checkpoint_ >= setup_.serve.checkpoint_every) {
+    const auto start = Clock::now();
     checkpoint_->Save(*mapper_, state_);
     since_checkpoint_ = 0;
+    line << ", checkpoint " << MsBetween(start, Clock::now()) << " ms";
   }
-  if (++since_publish_ >= setup_.serve.publish_every) Publish();
+  if (++since_publish_ >= setup_.serve.publish_every) {
+    const auto start = Clock::now();
+    Publish();
+    line << ", published " << MsBetween(start, Clock::now()) << " ms";
+  }
+  line << ", " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
+  Log(line.str());
   WriteStatus("running", waiting_ > 0 ? waiting_ - 1 : 0);
 }
 

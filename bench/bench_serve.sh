@@ -1,0 +1,115 @@
+#!/bin/bash
+# bench_serve.sh [BUILD_DIR] [--runs N] [--long N]: the daemon's overhead and its restart time.
+#
+# Table 1: frames per second of `rovermap replay` and of `rovermap serve` (every frame already in
+# the inbox, so the daemon never waits; serve.publish_every 1 and 10) on the default simulated
+# stereo traverse and a cloud traverse, runs interleaved, medians. Serve's time runs from its
+# start until status.json shows the last frame done (its publishing and checkpoints included).
+# Table 2: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
+# -9 in the middle of the snapshot at that frame, so that the last checkpoint_every (10) frames
+# must be re-applied from the journal: the worst case; against replaying those frames.
+set -euo pipefail
+
+BUILD=build
+RUNS=3
+LONG=500
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --runs) RUNS=$2; shift 2 ;;
+    --long) LONG=$2; shift 2 ;;
+    *) BUILD=$1; shift ;;
+  esac
+done
+R="$BUILD/apps/rovermap"
+[[ -x "$R" ]] || { echo "bench_serve: no $R (build first)" >&2; exit 2; }
+W=$(mktemp -d /tmp/rovermap_bench_serve.XXXXXX)
+trap 'rm -rf "$W"' EXIT
+
+now() { date +%s.%N; }
+median() { sort -g | awk '{v[NR]=$1} END {print (NR%2) ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2}'; }
+
+# An inbox holding frames 0..N-1 of SEQ, as a producer leaves them (DESIGN §7).
+make_inbox() {
+  local seq=$1 inbox=$2 n=$3
+  rm -rf "$inbox"; mkdir -p "$inbox/frames"
+  cp "$seq/sequence.yaml" "$inbox/"
+  grep -v '^#' "$seq/odometry.tum" | head -n "$n" | split -l 1 -d -a 6 - "$inbox/frames/x"
+  for f in "$inbox"/frames/x*; do mv "$f" "$inbox/frames/${f##*/x}.odom"; done
+  for ((k = 0; k < n; k++)); do
+    s=$(printf %06d $k)
+    for ext in left.png right.png ply; do
+      [[ -f "$seq/frames/$s.$ext" ]] && ln "$seq/frames/$s.$ext" "$inbox/frames/$s.$ext"
+    done
+  done
+  return 0
+}
+
+frames_of() { grep -vc '^#' "$1/odometry.tum"; }
+
+replay_s() {
+  local t0; t0=$(now)
+  "$R" replay "$1" --out "$W/replay" --force >/dev/null 2>&1
+  echo "$(now) - $t0" | bc -l
+}
+
+# Seconds until serve has done every frame of INBOX (N frames); extra args are --set options.
+serve_s() {
+  local inbox=$1 n=$2; shift 2
+  rm -rf "$W/serve"
+  local t0; t0=$(now)
+  "$R" serve --inbox "$inbox" --out "$W/serve" "$@" 2>"$W/serve.log" &
+  local pid=$!
+  until grep -q "\"next_frame\": $n," "$W/serve/status.json" 2>/dev/null; do sleep 0.02; done
+  local t1; t1=$(now)
+  kill -TERM $pid; wait $pid
+  echo "$t1 - $t0" | bc -l
+}
+
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+"$R" simulate --out "$W/stereo" >/dev/null 2>&1
+"$R" simulate --out "$W/cloud" --set sim.sensor=cloud --set sim.cloud_stride_px=3 >/dev/null 2>&1
+"$R" simulate --out "$W/long" --set sim.sensor=cloud --set sim.cloud_stride_px=3 \
+  --set sim.frames="$LONG" --set sim.path=loop --set sim.terrain_size_m=60 >/dev/null 2>&1
+
+printf '\n%-30s %8s %10s %12s %12s %10s %10s\n' "sequence" "frames" "replay f/s" "serve p=1" \
+  "serve p=10" "p=1/rep" "p=10/rep"
+for name in stereo cloud; do
+  seq="$W/$name"; n=$(frames_of "$seq")
+  make_inbox "$seq" "$W/inbox" "$n"
+  rep=(); s1=(); s10=()
+  for ((i = 0; i < RUNS; i++)); do
+    rep+=("$(replay_s "$seq")")
+    s1+=("$(serve_s "$W/inbox" "$n" --set serve.publish_every=1)")
+    s10+=("$(serve_s "$W/inbox" "$n" --set serve.publish_every=10)")
+  done
+  r=$(printf '%s\n' "${rep[@]}" | median)
+  a=$(printf '%s\n' "${s1[@]}" | median)
+  b=$(printf '%s\n' "${s10[@]}" | median)
+  printf '%-30s %8d %10.2f %12.2f %12.2f %10.2f %10.2f\n' "sim $name" "$n" \
+    "$(echo "$n / $r" | bc -l)" "$(echo "$n / $a" | bc -l)" "$(echo "$n / $b" | bc -l)" \
+    "$(echo "$r / $a" | bc -l)" "$(echo "$r / $b" | bc -l)"
+done
+
+printf '\n%-30s %10s %14s %14s %16s\n' "restart after" "frames" "restart [ms]" "snapshot [MB]" \
+  "replay them [s]"
+for n in 100 "$LONG"; do
+  make_inbox "$W/long" "$W/inbox" "$n"
+  rm -rf "$W/serve"
+  ROVERMAP_FAULT_KILL="checkpoint:written:$((n / 10))" \
+    "$R" serve --inbox "$W/inbox" --out "$W/serve" 2>/dev/null || true
+  "$R" serve --inbox "$W/inbox" --out "$W/serve" 2>"$W/serve.log" &
+  pid=$!
+  until grep -q "\"next_frame\": $n," "$W/serve/status.json" 2>/dev/null; do sleep 0.02; done
+  kill -TERM $pid; wait $pid
+  ms=$(grep -o 'resumed at frame [0-9]* ([0-9]* journalled steps re-applied) in [0-9]* ms' \
+    "$W/serve.log" | grep -o '[0-9]* ms' | grep -o '[0-9]*')
+  mb=$(echo "$(stat -c %s "$W/serve/checkpoint/state.bin") / 1000000" | bc -l)
+  # Replaying the same frames, for scale.
+  rm -rf "$W/part"; mkdir -p "$W/part/frames"; cp "$W/long/sequence.yaml" "$W/part/"
+  { grep '^#' "$W/long/odometry.tum"; grep -v '^#' "$W/long/odometry.tum" | head -n "$n"; } \
+    >"$W/part/odometry.tum"
+  for ((k = 0; k < n; k++)); do ln "$W/long/frames/$(printf %06d $k).ply" "$W/part/frames/"; done
+  printf '%-30s %10d %14s %14.1f %16.1f\n' "sim cloud loop, kill -9" "$n" "$ms" "$mb" \
+    "$(replay_s "$W/part")"
+done
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
