@@ -276,20 +276,24 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
     line << ")";
   }
   line << std::fixed << std::setprecision(0) << ", " << result->time.load_ms + result->time.total_ms
-       << " ms";
+       << " ms, " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
+  Log(line.str());
+  std::ostringstream writes;
+  writes << std::fixed << std::setprecision(0);
   if (++since_checkpoint_ >= setup_.serve.checkpoint_every) {
     const auto start = Clock::now();
     checkpoint_->Save(*mapper_, state_);
     since_checkpoint_ = 0;
-    line << ", checkpoint " << MsBetween(start, Clock::now()) << " ms";
+    writes << ", checkpoint " << MsBetween(start, Clock::now()) << " ms ("
+           << checkpoint_->snapshot_bytes() / 1000000.0 << " MB)";
   }
   if (++since_publish_ >= setup_.serve.publish_every) {
     const auto start = Clock::now();
     Publish();
-    line << ", published " << MsBetween(start, Clock::now()) << " ms";
+    writes << ", outputs published in " << MsBetween(start, Clock::now()) << " ms";
   }
-  line << ", " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
-  Log(line.str());
+  if (!writes.str().empty())
+    Log("serve: after frame " + std::to_string(result->index) + writes.str());
   WriteStatus("running", waiting_ > 0 ? waiting_ - 1 : 0);
 }
 
