@@ -273,12 +273,28 @@ std::optional<CellValue> ElevationMap::Cell(CellIndex cell) const {
 bool ElevationMap::Published(CellIndex cell, const CellValue& value) const {
   if (!Supported(value)) return false;
   if (options_.min_agreeing_neighbors <= 0) return true;
+  // Neighbours inside the cell's own tile are read from it directly; only those across a tile
+  // edge go through the tile table (a publication tests every cell: dem.tif, dem.png, counts).
+  const Tile* tile = FindTile(index_.CellToTile(cell));
+  const LocalIndex local = index_.CellToLocal(cell);
+  const int n = options_.tile_cells;
   int agreeing = 0;
   for (std::int64_t dy = -1; dy <= 1; ++dy) {
     for (std::int64_t dx = -1; dx <= 1; ++dx) {
       if (dx == 0 && dy == 0) continue;
-      const auto neighbour = Cell({cell.x + dx, cell.y + dy});
-      if (!neighbour || !Supported(*neighbour)) continue;
+      const int x = local.x + static_cast<int>(dx);
+      const int y = local.y + static_cast<int>(dy);
+      CellValue inside;
+      std::optional<CellValue> across;
+      const CellValue* neighbour = nullptr;
+      if (tile != nullptr && x >= 0 && x < n && y >= 0 && y < n) {
+        inside = tile->cells[index_.LinearIndex({x, y})].value;
+        neighbour = &inside;
+      } else {
+        across = Cell({cell.x + dx, cell.y + dy});
+        if (across) neighbour = &*across;
+      }
+      if (neighbour == nullptr || !Supported(*neighbour)) continue;
       const double step = std::abs(static_cast<double>(neighbour->elevation_m) - value.elevation_m);
       const double three_sigma =
           3.0 * std::sqrt(std::max(0.0, static_cast<double>(neighbour->variance_m2) +

@@ -60,12 +60,12 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     WriteFileAtomically(path,
                         std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   };
-  if (map.bounds().Empty() || map.PublishedCellCount() == 0) {
+  const auto no_data = [&] {
     cv::Mat image(120, 320, CV_8UC3, kBackground);
     cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
     encode_and_write(image);
-    return;
-  }
+  };
+  if (map.bounds().Empty()) return no_data();
 
   // Raster of the map and the trajectories, decimated by `step` cells per pixel (the cell
   // nearest each pixel).
@@ -87,7 +87,9 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   float z_min = std::numeric_limits<float>::infinity();
   float z_max = -z_min;
+  std::size_t published = 0;  // one pass over the cells: publishing tests 8 neighbours each
   map.ForEachPublishedCell([&](dem::CellIndex c, const dem::CellValue& v) {
+    ++published;
     const int col = static_cast<int>((c.x - lo.x) / step);
     const int row = static_cast<int>((hi.y - c.y) / step);
     float& px = height.at<float>(row, col);
@@ -95,6 +97,7 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     z_min = std::min(z_min, v.elevation_m);
     z_max = std::max(z_max, v.elevation_m);
   });
+  if (published == 0) return no_data();
   const double pixel_m = map.options().cell_size_m * static_cast<double>(step);
   if (!(z_max > z_min)) z_max = z_min + 1.0f;
 

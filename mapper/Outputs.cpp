@@ -47,11 +47,14 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   done("dem.tif");
   if (const octomap::OcTree* tree = mapper.octomap().tree()) {
     io::WriteOctoMap(out_dir / "map.bt", *tree);
+    done("map.bt");
     if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
   }
   io::WriteDemPreview(out_dir / "dem.png", mapper.elevation_map(), drawn);
+  done("dem.png");
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
   WriteDriftPlot(out_dir / "drift.png", results, drift);
+  done("drift.png");
 
   run.write_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
