@@ -505,7 +505,7 @@ TEST(ElevationMap, MemoryFollowsAreaNotPoints) {
 
 TEST(ElevationMap, CovarianceProjectionAndPoseUncertainty) {
   ElevationMapOptions options = Support(1);  // one point per cell
-  options.max_horizontal_sigma_cells = 0.0;   // the covariances below are metres wide
+  options.max_horizontal_sigma_cells = 0.0;  // the covariances below are metres wide
   ElevationMap map(options);
   // Height variance from a sensor-frame covariance: r3ᵀ Σ r3.
   Eigen::Matrix3d sigma = Eigen::Vector3d(0.01, 0.04, 0.09).asDiagonal();
@@ -593,12 +593,12 @@ TEST(ElevationMap, LoneCellsAndOneCellSpikesAreNotPublished) {
       fuse(x, y, spike ? 1.0 : rock ? 0.3 : 0.0);
     }
   }
-  fuse(5.025, 5.025, 0.0);  // a lone cell far away
+  fuse(5.025, 5.025, 0.0);                              // a lone cell far away
   EXPECT_TRUE(std::isnan(map.HeightAt(0.275, 0.275)));  // the spike
-  EXPECT_NEAR(map.HeightAt(0.675, 0.675), 0.3, 1e-6);     // the rock's centre
-  EXPECT_NEAR(map.HeightAt(0.625, 0.675), 0.3, 1e-6);     // its edge: 5 rock neighbours
+  EXPECT_NEAR(map.HeightAt(0.675, 0.675), 0.3, 1e-6);   // the rock's centre
+  EXPECT_NEAR(map.HeightAt(0.625, 0.675), 0.3, 1e-6);   // its edge: 5 rock neighbours
   EXPECT_TRUE(std::isnan(map.HeightAt(0.625, 0.625)));  // its corner: only 3
-  EXPECT_NEAR(map.HeightAt(0.225, 0.275), 0.0, 1e-6);     // beside the spike
+  EXPECT_NEAR(map.HeightAt(0.225, 0.275), 0.0, 1e-6);   // beside the spike
   EXPECT_TRUE(std::isnan(map.HeightAt(5.025, 5.025)));  // the lone cell
   // All but the spike and the rock's 4 corners (the patch's own corners have 3 neighbours too).
   EXPECT_EQ(map.PublishedCellCount(), 20u * 20u - 1u - 4u - 4u);
@@ -607,6 +607,49 @@ TEST(ElevationMap, LoneCellsAndOneCellSpikesAreNotPublished) {
   ElevationMap plain(off);
   for (int k = 0; k < 3; ++k) plain.FusePoint({5.025, 5.025, 0.0}, 1e-4, 0);
   EXPECT_NEAR(plain.HeightAt(5.025, 5.025), 0.0, 1e-6);
+}
+
+// Published reads the neighbours inside a cell's tile directly and the others through the tile
+// table: on 4×4-cell tiles (most cells at a tile edge), random heights, supports and gaps, it
+// must agree with the rule evaluated through Cell() for every cell.
+TEST(ElevationMap, PublishedAgreesWithTheRuleThroughCellAcrossTileEdges) {
+  ElevationMapOptions options;
+  options.tile_cells = 4;
+  ElevationMap map(options);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> height(-0.2, 0.2);
+  std::uniform_int_distribution<int> count(0, 5);
+  for (int x = -10; x < 10; ++x) {
+    for (int y = -10; y < 10; ++y) {
+      const int n = count(rng);
+      if (n > 0) map.SetCell({x, y}, height(rng), 1e-4, static_cast<std::uint32_t>(n));
+    }
+  }
+  const auto reference = [&](CellIndex cell, const CellValue& v) {
+    if (!map.Supported(v)) return false;
+    int agreeing = 0;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const auto w = map.Cell({cell.x + dx, cell.y + dy});
+        if (!w || !map.Supported(*w)) continue;
+        const double step = std::abs(static_cast<double>(w->elevation_m) - v.elevation_m);
+        const double three_sigma = 3.0 * std::sqrt(static_cast<double>(w->variance_m2) +
+                                                   static_cast<double>(v.variance_m2));
+        if (step <= std::max(options.neighbor_step_m, three_sigma)) ++agreeing;
+      }
+    }
+    return agreeing >= options.min_agreeing_neighbors;
+  };
+  std::size_t published = 0, cells = 0;
+  map.ForEachCell([&](CellIndex cell, const CellValue& v) {
+    ++cells;
+    EXPECT_EQ(map.Published(cell, v), reference(cell, v)) << cell.x << "," << cell.y;
+    published += map.Published(cell, v) ? 1 : 0;
+  });
+  EXPECT_GT(cells, 300u);
+  EXPECT_GT(published, 20u);  // both outcomes occur
+  EXPECT_LT(published, cells / 2);
 }
 
 }  // namespace

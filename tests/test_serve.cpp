@@ -14,7 +14,6 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -39,10 +38,22 @@ std::vector<std::string> DataLines(const fs::path& p) {
   return lines;
 }
 
-int CountMatches(const std::string& text, const std::string& pattern) {
-  const std::regex re(pattern);
-  return static_cast<int>(
-      std::distance(std::sregex_iterator(text.begin(), text.end(), re), std::sregex_iterator()));
+// Lines of `text` that start with `prefix` and hold one of `words` (std::regex would do, but
+// GCC 12 warns inside <regex> in the sanitizer build).
+int CountLines(const std::string& text, const std::string& prefix,
+               const std::vector<std::string>& words = {""}) {
+  int n = 0;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(prefix, 0) != 0) continue;
+    for (const std::string& w : words) {
+      if (line.find(w, prefix.size()) != std::string::npos) {
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
 }
 
 class Serve : public rovermap::testing::CommandFixture {
@@ -229,7 +240,7 @@ TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
   EXPECT_EQ(summary["frames"], 5);
   EXPECT_TRUE(summary.contains("metrics"));
   EXPECT_EQ(nlohmann::json::parse(Slurp(out / "status.json"))["state"], "stopped");
-  EXPECT_EQ(CountMatches(Slurp(dir_ / "log"), "serve: frame [0-9]+ "), 5);
+  EXPECT_EQ(CountLines(Slurp(dir_ / "log"), "serve: frame "), 5);
 }
 
 // kill -9 at each kind of point, then a restart on the same OUT: the result is the
@@ -253,9 +264,10 @@ TEST_F(Serve, KillNineAtAnyPointThenRestartLosesNothing) {
     Stop(pid);
     ExpectSameOutputs(replay, out);
     const std::string text = Slurp(dir_ / log);
-    EXPECT_EQ(CountMatches(text, "serve: frame [0-9]+ (first|registered|partial|fallback)"), 5)
+    EXPECT_EQ(CountLines(text, "serve: frame ", {" first", " registered", " partial", " fallback"}),
+              5)
         << text;
-    EXPECT_EQ(CountMatches(text, "serve: resumed at frame"), 1) << text;
+    EXPECT_EQ(CountLines(text, "serve: resumed at frame"), 1) << text;
   }
 }
 
