@@ -75,12 +75,12 @@ std::string ReadWholeFile(const std::filesystem::path& path) {
   return data;
 }
 
-void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents) {
-  CommitTemporaryFile(WriteTemporaryFile(path, contents), path);
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents, bool flush) {
+  CommitTemporaryFile(WriteTemporaryFile(path, contents, flush), path);
 }
 
 std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
-                                         std::string_view contents) {
+                                         std::string_view contents, bool flush) {
   if (path.empty() || !path.has_filename()) {
     throw IoError(path.string() + ": not a file path");
   }
@@ -113,7 +113,7 @@ std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
     left -= static_cast<std::size_t>(n);
   }
   // Flush before the rename so that a crash cannot leave a renamed but empty file.
-  if (::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
+  if (flush && ::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
   if (fd.Close() != 0) fail("cannot close file", errno);
   return temp;
 }

@@ -14,12 +14,15 @@ std::string ReadWholeFile(const std::filesystem::path& path);
 /// directory, are flushed to disk, and the temporary is renamed over `path`. Readers therefore
 /// see either the old file or the complete new one, never a partial file. On failure the
 /// temporary is removed and IoError (naming `path`) is thrown.
-void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
+/// `flush` false skips the flush to disk: still atomic for readers, but after a power loss the
+/// file may be empty (for files rewritten often whose loss costs nothing, as status.json).
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents,
+                         bool flush = true);
 
 /// The first half of WriteFileAtomically: `contents` written and flushed to a new
 /// `<path>.tmp-XXXXXX`, whose name is returned for CommitTemporaryFile.
 std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
-                                         std::string_view contents);
+                                         std::string_view contents, bool flush = true);
 
 /// Flushes a directory's entries (a rename in it) to disk, for durability across power loss.
 /// @throw IoError naming the directory.

@@ -178,11 +178,13 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
 
   const int bar_x = margin * 2 + map_image.cols;
   const int bar_top = margin;
+  // The colour map once (applyColorMap builds its table on every call: one call per row of the
+  // bar took most of a publication's dem.png).
+  cv::Mat ramp(256, 1, CV_8U), ramp_rgb;
+  for (int v = 0; v < 256; ++v) ramp.at<unsigned char>(v, 0) = static_cast<unsigned char>(v);
+  cv::applyColorMap(ramp, ramp_rgb, cv::COLORMAP_TURBO);
   for (int i = 0; i < bar_h; ++i) {
-    cv::Mat one(1, 1, CV_8U, cv::Scalar(255 - 255 * i / std::max(1, bar_h - 1)));
-    cv::Mat rgb;
-    cv::applyColorMap(one, rgb, cv::COLORMAP_TURBO);
-    const cv::Vec3b c = rgb.at<cv::Vec3b>(0, 0);
+    const cv::Vec3b c = ramp_rgb.at<cv::Vec3b>(255 - 255 * i / std::max(1, bar_h - 1), 0);
     cv::line(canvas, {bar_x, bar_top + i}, {bar_x + bar_w, bar_top + i}, cv::Scalar(c), 1);
   }
   const double range = z_max - z_min;

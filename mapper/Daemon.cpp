@@ -348,7 +348,8 @@ void Daemon::WriteStatus(const char* state, std::size_t waiting) {
        last_frame_time_.empty() ? nlohmann::json(nullptr) : nlohmann::json(last_frame_time_)},
       {"restart_ms", restart_ms_},
       {"updated", UtcNow()}};
-  io::WriteFileAtomically(setup_.out / "status.json", status.dump(2) + "\n");
+  // Rewritten after every frame and only for watching: not worth a flush to disk each time.
+  io::WriteFileAtomically(setup_.out / "status.json", status.dump(2) + "\n", /*flush=*/false);
 }
 
 }  // namespace rovermap::mapper
