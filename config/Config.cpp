@@ -208,6 +208,10 @@ static void ValidateCombinations(const Config& config) {
   if (st.block_size % 2 == 0) {
     throw ConfigError("stereo.block_size: must be odd (got " + std::to_string(st.block_size) + ")");
   }
+  if (st.subpixel_window_px != 0 && (st.subpixel_window_px < 3 || st.subpixel_window_px % 2 == 0)) {
+    throw ConfigError("stereo.subpixel_window_px: must be 0 or odd and >= 3 (got " +
+                      std::to_string(st.subpixel_window_px) + ")");
+  }
   if (st.algorithm == stereo::Algorithm::kBm && (st.block_size < 5 || st.block_size > 255)) {
     throw ConfigError("stereo.block_size: must be in [5, 255] with algorithm: bm");
   }
@@ -218,8 +222,9 @@ static void ValidateCombinations(const Config& config) {
     throw ConfigError("stereo.max_range_m: must be > stereo.min_range_m");
   }
   if (config.sim.terrain_size_m / config.sim.terrain_cell_m >= 20000) {
-    throw ConfigError("sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
-                      "samples along an edge)");
+    throw ConfigError(
+        "sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
+        "samples along an edge)");
   }
 }
 

@@ -34,12 +34,12 @@ const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
     {"sgbm_hh", stereo::Algorithm::kSgbmHh},
     {"bm", stereo::Algorithm::kBm}};
 const EnumNames<sim::PathShape> kPathShapeNames = {{"straight", sim::PathShape::kStraight},
-                                                 {"curves", sim::PathShape::kCurves},
-                                                 {"loop", sim::PathShape::kLoop}};
+                                                   {"curves", sim::PathShape::kCurves},
+                                                   {"loop", sim::PathShape::kLoop}};
 const EnumNames<mapper::Reference> kReferenceNames = {{"previous", mapper::Reference::kPrevious},
-                                                     {"local_map", mapper::Reference::kLocalMap}};
+                                                      {"local_map", mapper::Reference::kLocalMap}};
 const EnumNames<sim::SensorKind> kSensorKindNames = {{"stereo", sim::SensorKind::kStereo},
-                                                   {"cloud", sim::SensorKind::kCloud}};
+                                                     {"cloud", sim::SensorKind::kCloud}};
 
 // The table. Key names follow the struct fields, except where DESIGN.md §5 fixes the contract
 // name (reference_distance). One line per key; DumpYaml and default.yaml follow this order.
@@ -70,7 +70,8 @@ std::vector<KeyEntry> BuildRegistry() {
              "absolute test: rotation step");
   reg.Enum("acceleration", &R::acceleration, kAccelerationNames,
            "anderson: extrapolate the pose; auto: for point_to_point only");
-  reg.Int("anderson_depth", &R::anderson_depth, "count", AtLeast(1), "past steps Anderson combines");
+  reg.Int("anderson_depth", &R::anderson_depth, "count", AtLeast(1),
+          "past steps Anderson combines");
   reg.Double("orientation_threshold_deg", &R::orientation_threshold_deg, "deg", ClosedOpen(0, 180),
              "Theta: max normal/tangent angle; 0 = off");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),
@@ -108,6 +109,8 @@ std::vector<KeyEntry> BuildRegistry() {
   st.Int("speckle_range", &S::speckle_range, "px", AtLeast(0), "disparity step inside a blob");
   st.Int("texture_threshold", &S::texture_threshold, "count", AtLeast(0),
          "bm only: minimum window texture");
+  st.Int("subpixel_window_px", &S::subpixel_window_px, "px", AtLeast(0),
+         "sub-pixel refinement window (Lucas-Kanade); odd >= 3, 0 = off");
   st.Double("disparity_sigma_px", &S::disparity_sigma_px, "px", AtLeast(0),
             "error model: sigma_z = z^2 * sigma_d / (f * b)");
   st.Double("pixel_sigma_px", &S::pixel_sigma_px, "px", AtLeast(0),
@@ -131,7 +134,8 @@ std::vector<KeyEntry> BuildRegistry() {
   sim.Double("origin_longitude_deg", &M::origin_longitude_deg, "deg",
              Bounds{-180, false, 180, false}, "geodetic origin");
   sim.Double("origin_altitude_m", &M::origin_altitude_m, "m", AnyValue(), "geodetic origin");
-  sim.Double("terrain_size_m", &M::terrain_size_m, "m", GreaterThan(0), "edge of the square terrain");
+  sim.Double("terrain_size_m", &M::terrain_size_m, "m", GreaterThan(0),
+             "edge of the square terrain");
   sim.Double("terrain_cell_m", &M::terrain_cell_m, "m", GreaterThan(0), "heightfield spacing");
   sim.Double("relief_m", &M::relief_m, "m", AtLeast(0), "fractal relief amplitude");
   sim.Double("relief_wavelength_m", &M::relief_wavelength_m, "m", GreaterThan(0),
@@ -155,7 +159,8 @@ std::vector<KeyEntry> BuildRegistry() {
   sim.Double("track_m", &M::track_m, "m", GreaterThan(0), "roll from the terrain");
   sim.Enum("sensor", &M::sensor, kSensorKindNames, "stereo images or PLY clouds");
   sim.Double("mast_height_m", &M::mast_height_m, "m", AnyValue(), "camera above the body origin");
-  sim.Double("mast_forward_m", &M::mast_forward_m, "m", AnyValue(), "camera ahead of the body origin");
+  sim.Double("mast_forward_m", &M::mast_forward_m, "m", AnyValue(),
+             "camera ahead of the body origin");
   sim.Double("camera_tilt_deg", &M::camera_tilt_deg, "deg", Bounds{-89, false, 89, false},
              "optical axis below the horizontal");
   sim.Double("baseline_m", &M::baseline_m, "m", GreaterThan(0), "stereo baseline");
@@ -194,8 +199,8 @@ std::vector<KeyEntry> BuildRegistry() {
                   "height sigma of points without a covariance");
   dem_keys.Double("min_point_variance_m2", &D::min_point_variance_m2, "m^2", AtLeast(0),
                   "floor on a point's height variance");
-  dem_keys.Double("max_horizontal_sigma_cells", &D::max_horizontal_sigma_cells, "cells",
-                  AtLeast(0), "drop points whose horizontal sigma exceeds this; 0 = off");
+  dem_keys.Double("max_horizontal_sigma_cells", &D::max_horizontal_sigma_cells, "cells", AtLeast(0),
+                  "drop points whose horizontal sigma exceeds this; 0 = off");
   dem_keys.Int("min_support", &D::min_support, "count", AtLeast(1),
                "points a cell needs before it is published (else NaN)");
   dem_keys.Int("min_agreeing_neighbors", &D::min_agreeing_neighbors, "count",

@@ -9,7 +9,8 @@ namespace rovermap::mapper {
 namespace {
 
 std::vector<std::size_t> Sample(const std::vector<Eigen::Vector3d>& points, double voxel_m) {
-  if (voxel_m > 0.0) return registration::VoxelSample(points, voxel_m);
+  if (voxel_m > 0.0)
+    return registration::VoxelSample(points, voxel_m, registration::VoxelChoice::kFirst);
   std::vector<std::size_t> all(points.size());
   std::iota(all.begin(), all.end(), std::size_t{0});
   return all;

@@ -61,15 +61,16 @@ struct RegistrationOptions {
   /// Neighbours used for PCA surface normals when the cloud has none [count].
   int normal_neighbors = 10;
 
-  /// Source points matched: one per voxel of edge sample_voxel_factor · D (the point nearest
-  /// the voxel centre), so dense patches do not outvote sparse ones and the cost follows the
-  /// covered area, not the point count [× D]; 0 = every point.
+  /// Source points matched: one per voxel of edge sample_voxel_factor · D (any member,
+  /// VoxelChoice::kAnyMember, not one chosen by position or order), so dense patches do not outvote
+  /// sparse ones and the cost follows the covered area, not the point count [× D]; 0 = every point.
   double sample_voxel_factor = 1.0;
   /// At most this many of those sampled points are matched, taken evenly through the input
   /// order (every k-th) [count]; 0 = no limit.
   int max_sample_points = 15000;
 
-  /// Coarse to fine (on top of the voxel sample): the first `coarse_iterations` use every `coarse_step`-th source point.
+  /// Coarse to fine (on top of the voxel sample): the first `coarse_iterations` use every
+  /// `coarse_step`-th source point.
   bool coarse_to_fine = false;
   int coarse_iterations = 5;
   int coarse_step = 10;

@@ -15,6 +15,14 @@ std::size_t Hash(const Eigen::Vector3i& c) {
          (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())) * 83492791ull);
 }
 
+// SplitMix64's finaliser: a fixed pseudo-random rank of a point index.
+std::uint64_t MixIndex(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
 std::size_t TableSize(std::size_t cells) {
   std::size_t size = 16;
   while (size < 2 * cells) size *= 2;
@@ -65,7 +73,8 @@ void VoxelGrid::Grow() {
   }
 }
 
-std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m) {
+std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m,
+                                     VoxelChoice choice) {
   std::vector<std::size_t> sample;
   if (!(edge_m > 0.0)) {
     sample.resize(points.size());
@@ -73,13 +82,24 @@ std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points,
     return sample;
   }
   VoxelGrid grid(edge_m, points.size() / 4 + 1);
-  // The first point of each cell, in input order: choosing by position (say, nearest the
-  // centre) would favour points whose noise pulls them towards the centre and bias the
-  // sampled surface.
+  std::vector<std::uint64_t> rank;  // kAnyMember: the kept point's hash
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
-    if (grid.Insert(points[i]) == sample.size()) sample.push_back(i);
+    const std::size_t id = grid.Insert(points[i]);
+    if (choice == VoxelChoice::kFirst) {
+      if (id == sample.size()) sample.push_back(i);
+      continue;
+    }
+    const std::uint64_t r = MixIndex(i);
+    if (id == sample.size()) {
+      sample.push_back(i);
+      rank.push_back(r);
+    } else if (r < rank[id]) {
+      sample[id] = i;
+      rank[id] = r;
+    }
   }
+  if (choice == VoxelChoice::kAnyMember) std::sort(sample.begin(), sample.end());
   return sample;
 }
 

@@ -38,10 +38,21 @@ class VoxelGrid {
   std::size_t cells_ = 0;
 };
 
-/// One representative per occupied voxel of edge `edge_m` (the first in input order), so the
-/// sample is spread evenly whatever the input density (stereo clouds are far denser near the
-/// camera). Indices into `points`, ascending; non-finite points are skipped. `edge_m` <= 0:
-/// all points.
-std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m);
+/// Which point of a voxel VoxelSample keeps.
+enum class VoxelChoice {
+  /// A member picked by a fixed hash of its index, whatever its position or input order: its
+  /// noise is distributed like any point's. The sample for registration.
+  kAnyMember,
+  /// The first in input order (LocalMap lists its newest frame first to keep the latest view).
+  /// Biased on a noisy cloud in image order: a voxel's first point comes from the farthest
+  /// pixel row that reached it, so its range noise pulls it towards the camera.
+  kFirst,
+};
+
+/// One representative per occupied voxel of edge `edge_m` (see VoxelChoice), so the sample is
+/// spread evenly whatever the input density (stereo clouds are far denser near the camera).
+/// Indices into `points`, ascending; non-finite points are skipped. `edge_m` <= 0: all points.
+std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points, double edge_m,
+                                     VoxelChoice choice = VoxelChoice::kAnyMember);
 
 }  // namespace rovermap::registration

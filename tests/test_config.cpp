@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "tests/support/ScratchDir.hpp"
 #include "config/Config.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::config {
 namespace {
@@ -29,7 +29,8 @@ const fs::path kDefaultYaml = fs::path(ROVERMAP_SOURCE_DIR) / "config" / "defaul
 // EXPECT_TRUE(Contains(text, part)) prints both on failure (no gmock here).
 ::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
   if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
+  return ::testing::AssertionFailure()
+         << "\"" << text << "\"\n does not contain \"" << part << "\"";
 }
 
 // Writes `text` to a fresh file in the test's temporary directory.
@@ -208,10 +209,27 @@ TEST(Keys, DumpListsEveryKeyOnce) {
 // Each key writes its own field and prints it back: changing one key changes that line only.
 TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
   const std::vector<std::string> candidates = {
-      "true",           "false",   "7",     "3",         "0.5",
-      "0.25",           "2",       "curve", "symmetric", "dual_quaternion",
-      "point_to_plane", "point_to_point", "relative", "sgbm", "32", "straight", "cloud", "64",
-      "0.75", "none", "local_map"};  // octomap.prob_hit: in (0.5, 1); acceleration; reference
+      "true",
+      "false",
+      "7",
+      "3",
+      "0.5",
+      "0.25",
+      "2",
+      "curve",
+      "symmetric",
+      "dual_quaternion",
+      "point_to_plane",
+      "point_to_point",
+      "relative",
+      "sgbm",
+      "32",
+      "straight",
+      "cloud",
+      "64",
+      "0.75",
+      "none",
+      "local_map"};  // octomap.prob_hit: in (0.5, 1); acceleration; reference
   for (const std::string& key : KnownKeys()) {
     // geometry=curve is only valid with point_to_point residuals: start from there.
     std::vector<std::string> base;
@@ -342,8 +360,18 @@ TEST(ConfigErrors, CurveGeometryRejectsPointToPlane) {
   EXPECT_EQ(OverrideError("registration.geometry=curve"),
             "registration.residual: point_to_plane needs surface normals; with geometry: curve set "
             "registration.residual=point_to_point");
-  EXPECT_NO_THROW(LoadConfig(std::nullopt, {"registration.geometry=curve",
-                                            "registration.residual=point_to_point"}));
+  EXPECT_NO_THROW(LoadConfig(
+      std::nullopt, {"registration.geometry=curve", "registration.residual=point_to_point"}));
+}
+
+TEST(ConfigErrors, SubpixelWindowIsZeroOrOddAndAtLeastThree) {
+  for (const char* bad : {"stereo.subpixel_window_px=4", "stereo.subpixel_window_px=1"}) {
+    EXPECT_NE(OverrideError(bad).find("stereo.subpixel_window_px: must be 0 or odd and >= 3"),
+              std::string::npos)
+        << bad;
+  }
+  EXPECT_NO_THROW(LoadConfig(std::nullopt, {"stereo.subpixel_window_px=0"}));
+  EXPECT_NO_THROW(LoadConfig(std::nullopt, {"stereo.subpixel_window_px=5"}));
 }
 
 TEST(ConfigErrors, UnknownKeyIsNamedWithASuggestion) {

@@ -119,7 +119,8 @@ TEST(Mapper, SimulatedCloudTraverse) {
   sim::SimOptions o;  // the default 30-frame traverse, 4.4 m, 1 % outliers
   o.sensor = sim::SensorKind::kCloud;
   const Traverse t = ReplaySimulated(o, "cloud");
-  // Measured: 0.0096 m against 0.0704 m; DEM 11 385 cells, RMSE 2.7 cm, p95 6.4 cm, none off.
+  // Measured: 0.0072 m against 0.0704 m; DEM 11 379 cells, RMSE 2.3 cm, p95 5.3 cm, none off
+  // (0.0096 m, RMSE 2.7 cm, p95 6.4 cm with the old voxel sample, see VoxelChoice).
   // (Registered without the points' covariances: 0.0284 m but RMSE 1.75 cm: the simulated dead
   // reckoning's roll and pitch are exact, so every change registration makes to them, however
   // small, tilts the far end of the map; the DEM error grows away from the start.)
@@ -137,9 +138,9 @@ TEST(Mapper, SimulatedStereoTraverse) {
   sim::SimOptions o;  // the default mast camera, 12 frames (1.8 m)
   o.frames = 12;
   const Traverse t = ReplaySimulated(o, "stereo");
-  // Measured: 0.0103 m against 0.0247 m; DEM 8776 cells, RMSE 7.2 cm, p95 2.5 cm, 18 cells off
+  // Measured: 0.0105 m against 0.0247 m; DEM 8766 cells, RMSE 7.7 cm, p95 2.35 cm, 22 cells off
   // by more than 0.2 m (0.2 %: steep crater rims, where a few cm of horizontal error are
-  // decimetres of height, and skyline cells; over the 30-frame traverse 2 remain).
+  // decimetres of height, and skyline cells; 11 of 15 051 over the 30-frame traverse).
   EXPECT_LT(t.drift_ratio, 0.55);
   EXPECT_GT(t.dem.cells, 8000u);
   EXPECT_LT(t.dem.rmse_m, 0.1);
@@ -176,8 +177,9 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   const auto& odo = run.drift.odometry;
   std::printf("kitti: ATE origin registered %.4f m, dead reckoning %.4f m\n", reg.ate_origin_m.rmse,
               odo.ate_origin_m.rmse);
-  // Measured: 0.223 m against dead reckoning's 0.365 m (its 3 % scale error; the registration
-  // reads the steps about 1 % long on this real stereo).
+  // Measured: 0.186 m against dead reckoning's 0.365 m (its 3 % scale error; the registration
+  // reads the steps about 1 % long on this real stereo); 0.223 m before the sub-pixel
+  // refinement and the unbiased voxel sample.
   EXPECT_LT(reg.ate_origin_m.rmse, 0.75 * odo.ate_origin_m.rmse);
   // The road: published cells within 1 m of the car's true path must lie on it (the body
   // origin is on the road below the camera), no spikes.
@@ -195,10 +197,11 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   });
   std::printf("kitti road: %zu cells, RMSE %.4f m, p95 %.4f m, %zu off by 0.2 m\n", road.cells,
               road.rmse_m, road.p95_m, road.off_20cm);
-  // Measured (20 frames): 13 694 cells, RMSE 10.9 cm, p95 14.3 cm, no cell off by more than
-  // 0.2 m. Most of the RMSE is an offset: the rig's nominal 1.65 m camera height puts the body
-  // origin about 6 cm off the road (a plane fit of frame 0 gives 1.59 m, see the dataset's
-  // README), and the registered trajectory's own height drift adds to it.
+  // Measured (20 frames): 13 867 cells, RMSE 11.4 cm, p95 13.0 cm, 6 cells off by more than
+  // 0.2 m (none before the sub-pixel refinement and the unbiased voxel sample). Most of the RMSE is
+  // an offset: the rig's nominal 1.65 m camera height puts the body origin about 6 cm off the road
+  // (a plane fit of frame 0 gives 1.59 m, see the dataset's README), and the registered
+  // trajectory's own height drift adds to it.
   EXPECT_GT(road.cells, 12000u);
   EXPECT_LT(road.rmse_m, 0.15);
   EXPECT_LT(road.p95_m, 0.18);
