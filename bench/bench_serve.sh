@@ -33,7 +33,8 @@ make_inbox() {
   local seq=$1 inbox=$2 n=$3
   rm -rf "$inbox"; mkdir -p "$inbox/frames"
   cp "$seq/sequence.yaml" "$inbox/"
-  grep -v '^#' "$seq/odometry.tum" | head -n "$n" | split -l 1 -d -a 6 - "$inbox/frames/x"
+  # awk reads to the end (head would leave grep a SIGPIPE, fatal under pipefail).
+  awk -v n="$n" '!/^#/ && ++k <= n' "$seq/odometry.tum" | split -l 1 -d -a 6 - "$inbox/frames/x"
   for f in "$inbox"/frames/x*; do mv "$f" "$inbox/frames/${f##*/x}.odom"; done
   for ((k = 0; k < n; k++)); do
     s=$(printf %06d $k)
@@ -106,8 +107,7 @@ for n in 100 "$LONG"; do
   mb=$(echo "$(stat -c %s "$W/serve/checkpoint/state.bin") / 1000000" | bc -l)
   # Replaying the same frames, for scale.
   rm -rf "$W/part"; mkdir -p "$W/part/frames"; cp "$W/long/sequence.yaml" "$W/part/"
-  { grep '^#' "$W/long/odometry.tum"; grep -v '^#' "$W/long/odometry.tum" | head -n "$n"; } \
-    >"$W/part/odometry.tum"
+  awk -v n="$n" '/^#/ || ++k <= n' "$W/long/odometry.tum" >"$W/part/odometry.tum"
   for ((k = 0; k < n; k++)); do ln "$W/long/frames/$(printf %06d $k).ply" "$W/part/frames/"; done
   printf '%-30s %10d %14s %14.1f %16.1f\n' "sim cloud loop, kill -9" "$n" "$ms" "$mb" \
     "$(replay_s "$W/part")"
