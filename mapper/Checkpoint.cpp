@@ -552,6 +552,7 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
 
 void Checkpoint::Save(const Mapper& mapper, const DaemonState& state) {
   Writer w;
+  w.data().reserve(snapshot_bytes_ + snapshot_bytes_ / 4);  // the last one's size, and growth
   w.data().append(kSnapshotMagic, sizeof(kSnapshotMagic));
   w.String(fingerprint_);
   PutDaemon(&w, state);
@@ -574,19 +575,36 @@ void Checkpoint::Save(const Mapper& mapper, const DaemonState& state) {
 }
 
 std::uint32_t Crc32(std::string_view data) {
-  static const std::array<std::uint32_t, 256> table = [] {
-    std::array<std::uint32_t, 256> t{};
+  // Slicing by 8 (Intel's method): eight bytes per step through eight tables, about 5x the
+  // byte-wise loop; a snapshot runs to megabytes and is written every few frames.
+  static const std::array<std::array<std::uint32_t, 256>, 8> table = [] {
+    std::array<std::array<std::uint32_t, 256>, 8> t{};
     for (std::uint32_t i = 0; i < 256; ++i) {
       std::uint32_t c = i;
       for (int k = 0; k < 8; ++k) c = (c & 1U) ? 0xEDB88320U ^ (c >> 1) : c >> 1;
-      t[i] = c;
+      t[0][i] = c;
     }
+    for (std::size_t k = 1; k < 8; ++k)
+      for (std::size_t i = 0; i < 256; ++i)
+        t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFFU];
     return t;
   }();
   std::uint32_t crc = 0xFFFFFFFFU;
-  for (const char ch : data) {
-    crc = table[(crc ^ static_cast<std::uint8_t>(ch)) & 0xFFU] ^ (crc >> 8);
+  const auto* p = reinterpret_cast<const unsigned char*>(data.data());
+  std::size_t n = data.size();
+  for (; n >= 8; n -= 8, p += 8) {
+    // Words assembled byte by byte: the same result whatever the machine's byte order.
+    const std::uint32_t lo =
+        crc ^ (static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+               static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24);
+    const std::uint32_t hi =
+        static_cast<std::uint32_t>(p[4]) | static_cast<std::uint32_t>(p[5]) << 8 |
+        static_cast<std::uint32_t>(p[6]) << 16 | static_cast<std::uint32_t>(p[7]) << 24;
+    crc = table[7][lo & 0xFFU] ^ table[6][(lo >> 8) & 0xFFU] ^ table[5][(lo >> 16) & 0xFFU] ^
+          table[4][lo >> 24] ^ table[3][hi & 0xFFU] ^ table[2][(hi >> 8) & 0xFFU] ^
+          table[1][(hi >> 16) & 0xFFU] ^ table[0][hi >> 24];
   }
+  for (; n > 0; --n, ++p) crc = table[0][(crc ^ *p) & 0xFFU] ^ (crc >> 8);
   return crc ^ 0xFFFFFFFFU;
 }
 
