@@ -178,7 +178,15 @@ bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
   }
   if (MsBetween(*gap_since_, Clock::now()) < 1000.0 * setup_.serve.gap_timeout_s) return false;
   gap_since_.reset();
-  DeclareMissing(next, it != files.end() ? &it->second : nullptr);
+  // Every index up to the first ready frame has waited as long: a run of missing frames costs
+  // one timeout, not one each.
+  const auto ready = std::find_if(files.upper_bound(next), files.end(), [&](const auto& entry) {
+    return entry.second.Complete(sequence_.sensor_type);
+  });
+  for (std::size_t index = next; index < ready->first; ++index) {
+    const auto present = files.find(index);
+    DeclareMissing(index, present != files.end() ? &present->second : nullptr);
+  }
   return true;
 }
 
