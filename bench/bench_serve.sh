@@ -4,7 +4,7 @@
 # Table 1: frames per second of `rovermap replay` and of `rovermap serve` (every frame already in
 # the inbox, so the daemon never waits; serve.publish_every 1 and 10) on the default simulated
 # stereo traverse and a cloud traverse, runs interleaved, medians. Serve's time runs from its
-# start until status.json shows the last frame done (its publishing and checkpoints included).
+# start until summary.json covers the last frame (its publishing and checkpoints included).
 # Table 2: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
 # -9 in the middle of the snapshot at that frame, so that the last checkpoint_every (10) frames
 # must be re-applied from the journal: the worst case; against replaying those frames.
@@ -60,7 +60,8 @@ serve_s() {
   local t0; t0=$(now)
   "$R" serve --inbox "$inbox" --out "$W/serve" "$@" 2>"$W/serve.log" &
   local pid=$!
-  until grep -q "\"next_frame\": $n," "$W/serve/status.json" 2>/dev/null; do sleep 0.02; done
+  # Done when the outputs of the last frame are out (the publications run in the background).
+  until grep -q "\"frames\": $n," "$W/serve/summary.json" 2>/dev/null; do sleep 0.02; done
   local t1; t1=$(now)
   kill -TERM $pid; wait $pid
   echo "$t1 - $t0" | bc -l
