@@ -38,8 +38,7 @@ void InstallSignalHandlers() {
 
 // Test hook: ROVERMAP_FAULT_KILL="POINT[:N]" kills the process (SIGKILL, as a power loss would
 // stop it) the N-th time (default 1st) it passes POINT: "frame:processed", "journal:partial",
-// "checkpoint:written", "checkpoint:renamed", "publish:dem.tif", ... (mapper/Daemon.hpp). The
-// publications run in a child process: there N counts within one publication.
+// "checkpoint:written", "checkpoint:renamed", "publish:dem.tif", ... (mapper/Daemon.hpp).
 mapper::FaultHook FaultFromEnvironment() {
   const char* spec = std::getenv("ROVERMAP_FAULT_KILL");
   if (spec == nullptr || *spec == '\0') return {};
@@ -52,13 +51,8 @@ mapper::FaultHook FaultFromEnvironment() {
     point.resize(colon);
   }
   auto seen = std::make_shared<int>(0);
-  const pid_t daemon = ::getpid();
-  return [point, count, seen, daemon](std::string_view at) {
-    if (at != point || ++*seen < count) return;
-    // In the background writer of a publication (a forked child, whose count started from
-    // the daemon's at the fork) the power goes for both.
-    if (::getpid() != daemon) ::kill(daemon, SIGKILL);
-    ::raise(SIGKILL);
+  return [point, count, seen](std::string_view at) {
+    if (at == point && ++*seen >= count) ::raise(SIGKILL);
   };
 }
 

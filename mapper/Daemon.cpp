@@ -2,19 +2,14 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <Eigen/Core>
 #include <algorithm>
 #include <cerrno>
-#include <csignal>
 #include <cstring>
 #include <ctime>
 #include <iomanip>
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
 #include <sstream>
 #include <system_error>
 #include <utility>
@@ -75,10 +70,6 @@ Daemon::Daemon(DaemonSetup setup) : setup_(std::move(setup)), inbox_(setup_.inbo
 }
 
 Daemon::~Daemon() {
-  if (publisher_ > 0) {  // an error left it running: let it finish, never orphan it
-    ::waitpid(publisher_, nullptr, 0);
-    ::close(publisher_pipe_);
-  }
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
 }
 
@@ -139,7 +130,6 @@ void Daemon::Run(const std::atomic<int>& stop) {
   io::DirectoryWatcher watcher(inbox_.frames_dir(), o.use_inotify);
   WriteStatus("running", 0);
   while (stop.load() == 0) {
-    WaitForPublisher(/*block=*/false);
     const std::map<std::size_t, io::InboxFrameFiles> files = inbox_.Scan();
     waiting_ = 0;
     for (const auto& [index, present] : files) {
@@ -158,7 +148,7 @@ void Daemon::Run(const std::atomic<int>& stop) {
     checkpoint_->Save(*mapper_, state_);
     since_checkpoint_ = 0;
   }
-  Publish(/*in_background=*/false);
+  Publish();
   WriteStatus("stopped", waiting_);
   Log("serve: stopped after frame " + std::to_string(state_.next_index) + " (" +
       std::to_string(processed_) + " frames this run)");
@@ -306,8 +296,9 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
            << checkpoint_->snapshot_bytes() / 1000000.0 << " MB)";
   }
   if (++since_publish_ >= setup_.serve.publish_every) {
-    Publish(/*in_background=*/true);
-    writes << ", outputs handed to a writer process";
+    const auto start = Clock::now();
+    Publish();
+    writes << ", outputs published in " << MsBetween(start, Clock::now()) << " ms";
   }
   if (!writes.str().empty())
     Log("serve: after frame " + std::to_string(result->index) + writes.str());
@@ -327,89 +318,19 @@ void Daemon::RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files)
   }
 }
 
-void Daemon::Publish(bool in_background) {
+void Daemon::Publish() {
   since_publish_ = 0;
   if (mapper_->results().empty()) return;
-  WaitForPublisher(/*block=*/true);  // one publication at a time, so they land in order
   RunInfo run;
   run.sequence = setup_.inbox.string();
   // Frames per second over the frames' own processing time: the daemon idles between frames.
   for (const FrameResult& r : mapper_->results()) run.wall_ms += r.time.load_ms + r.time.total_ms;
-  run.peak_rss_mb = PeakRssMb();
   run.extra["serve"] = {{"missing_frames", state_.missing},
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
-  const auto write = [&] {
-    WriteOutputs(setup_.out, *mapper_, run, setup_.eval,
-                 [this](const std::string& file) { Fault("publish:" + file); });
-  };
-  if (!in_background) return write();
-
-  // In the background: a forked child writes the outputs from its copy-on-write view of the
-  // state while this process takes the next frames. The child has no other threads, so the
-  // OctoMap's must be idle first, and it must not start OpenMP or OpenCV thread pools.
-  mapper_->octomap();
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) return write();
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return write();
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    ::close(lock_fd_);  // the lock stays the parent's
-    // Never outlive the daemon: an orphan would publish stale outputs after a restart.
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (::getppid() != parent) ::_exit(1);
-    cv::setNumThreads(0);
-    Eigen::setNbThreads(1);
-    std::string outcome;
-    const auto start = Clock::now();
-    try {
-      write();
-      std::ostringstream ok;
-      ok << "ok " << std::fixed << std::setprecision(0) << MsBetween(start, Clock::now());
-      outcome = ok.str();
-    } catch (const std::exception& e) {
-      outcome = std::string("error ") + e.what();
-    }
-    const ssize_t n = ::write(fds[1], outcome.data(), outcome.size());
-    ::_exit(n >= 0 && outcome.rfind("ok", 0) == 0 ? 0 : 1);
-  }
-  ::close(fds[1]);
-  publisher_ = pid;
-  publisher_pipe_ = fds[0];
-  publisher_frame_ = mapper_->results().back().index;
-}
-
-void Daemon::WaitForPublisher(bool block) {
-  if (publisher_ < 0) return;
-  int status = 0;
-  pid_t done = 0;
-  do {
-    done = ::waitpid(publisher_, &status, block ? 0 : WNOHANG);
-  } while (done < 0 && errno == EINTR);
-  if (done == 0) return;  // still writing
-  std::string outcome;
-  char buffer[512];
-  for (ssize_t n; (n = ::read(publisher_pipe_, buffer, sizeof(buffer))) > 0;) {
-    outcome.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(publisher_pipe_);
-  publisher_ = -1;
-  publisher_pipe_ = -1;
-  const std::string frame = std::to_string(publisher_frame_);
-  if (done > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0 && outcome.rfind("ok ", 0) == 0) {
-    Log("serve: outputs after frame " + frame + " published in " + outcome.substr(3) + " ms");
-    return;
-  }
-  throw io::IoError(
-      setup_.out.string() + ": publishing the outputs after frame " + frame +
-      " failed: " + (outcome.rfind("error ", 0) == 0 ? outcome.substr(6) : "writer process died"));
+  WriteOutputs(setup_.out, *mapper_, run, setup_.eval,
+               [this](const std::string& file) { Fault("publish:" + file); });
 }
 
 void Daemon::WriteStatus(const char* state, std::size_t waiting) {

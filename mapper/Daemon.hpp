@@ -4,8 +4,6 @@
 // after every frame, and every frame journalled (mapper/Checkpoint) before it counts as done,
 // so that a restart after `kill -9` resumes where the run stopped.
 
-#include <sys/types.h>
-
 #include <atomic>
 #include <chrono>
 #include <cstddef>
@@ -78,8 +76,7 @@ class Daemon {
   void DeclareMissing(std::size_t index, const io::InboxFrameFiles* files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
   void RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files);
-  void Publish(bool in_background);
-  void WaitForPublisher(bool block);
+  void Publish();
   void WriteStatus(const char* state, std::size_t waiting);
   void Log(const std::string& line) const {
     if (setup_.log) setup_.log(line);
@@ -105,11 +102,6 @@ class Daemon {
   double last_timestamp_ = -1e300;
   std::string last_frame_time_;  // UTC, ISO 8601
   std::size_t waiting_ = 0;
-  // The publication being written by a child process (fork: a copy-on-write view of the state
-  // as it was), its pipe for the outcome, and the frame it covers.
-  pid_t publisher_ = -1;
-  int publisher_pipe_ = -1;
-  std::size_t publisher_frame_ = 0;
 };
 
 }  // namespace rovermap::mapper

@@ -252,7 +252,7 @@ TEST_F(Serve, KillNineAtAnyPointThenRestartLosesNothing) {
   int run = 0;
   for (const std::string fault :
        {"frame:processed:4", "journal:partial:3", "checkpoint:written:1", "checkpoint:renamed:2",
-        "publish:dem.tif:1", "publish:summary.json:1"}) {
+        "publish:dem.tif:1", "publish:summary.json:2"}) {
     SCOPED_TRACE(fault);
     const std::string tag = std::to_string(++run);
     const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox-" + tag);
@@ -402,7 +402,8 @@ TEST_F(Serve, SecondSignalExitsAtOnceAndTheRestartStillEqualsReplay) {
 }
 
 // A publication that cannot be written (here dem.tif's place is taken by a directory) stops
-// the daemon with status 1 and the writer's message, even though a child process wrote it.
+// the daemon with status 1 and a message naming the file; no temporary is left beside it. The
+// journal holds every frame done, so a restart loses nothing.
 TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
   const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox");
   const fs::path out = dir_ / "out";
@@ -410,9 +411,7 @@ TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
   const pid_t pid = Start(inbox, out, "log", {"--set", "serve.publish_every=2"});
   EXPECT_EQ(WaitExit(pid), 1) << Slurp(dir_ / "log");
   const std::string log = Slurp(dir_ / "log");
-  EXPECT_NE(log.find("publishing the outputs after frame 1 failed"), std::string::npos) << log;
   EXPECT_NE(log.find("dem.tif"), std::string::npos) << log;
-  // Nothing half-written is left beside it.
   for (const auto& entry : fs::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
   }
