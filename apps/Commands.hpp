@@ -4,6 +4,9 @@
 #include <string>
 #include <vector>
 
+#include "config/Config.hpp"
+#include "mapper/Mapper.hpp"
+
 namespace rovermap::apps {
 
 /// Exit statuses (DESIGN.md §5).
@@ -70,6 +73,10 @@ CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError / mapper::DaemonBusyError; returns the
 /// exit status.
 int RunServe(const ServeArgs& args);
+
+/// The pipeline's options (mapper, registration, stereo, dem, octomap) out of a configuration:
+/// replay and serve run the same pipeline.
+mapper::PipelineOptions PipelineFrom(const config::Config& cfg);
 
 /// A command-line value that parses but makes no sense (exit 2).
 class UsageError : public std::runtime_error {

@@ -27,10 +27,6 @@ double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-mapper::PipelineOptions PipelineFrom(const config::Config& cfg) {
-  return {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
-}
-
 // Progress on stderr: a rewritten line on a terminal, one line per frame otherwise.
 class Progress {
  public:
@@ -109,6 +105,10 @@ void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
 }
 
 }  // namespace
+
+mapper::PipelineOptions PipelineFrom(const config::Config& cfg) {
+  return {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
+}
 
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
   CLI::App* cmd = app->add_subcommand(

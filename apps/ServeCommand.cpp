@@ -86,7 +86,7 @@ int RunServe(const ServeArgs& args) {
   mapper::DaemonSetup setup;
   setup.inbox = args.inbox;
   setup.out = args.out;
-  setup.pipeline = {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
+  setup.pipeline = PipelineFrom(cfg);
   setup.serve = cfg.serve;
   setup.eval = cfg.eval;
   setup.config_text = config::DumpYaml(cfg);

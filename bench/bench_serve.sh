@@ -26,6 +26,7 @@ W=$(mktemp -d /tmp/rovermap_bench_serve.XXXXXX)
 trap 'rm -rf "$W"' EXIT
 
 now() { date +%s.%N; }
+calc() { awk "BEGIN { print $1 }"; }  # awk is in every Debian; bc is not
 median() { sort -g | awk '{v[NR]=$1} END {print (NR%2) ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2}'; }
 
 # An inbox holding frames 0..N-1 of SEQ, as a producer leaves them (DESIGN §7).
@@ -50,7 +51,7 @@ frames_of() { grep -vc '^#' "$1/odometry.tum"; }
 replay_s() {
   local t0; t0=$(now)
   "$R" replay "$1" --out "$W/replay" --force >/dev/null 2>&1
-  echo "$(now) - $t0" | bc -l
+  calc "$(now) - $t0"
 }
 
 # Seconds until serve has done every frame of INBOX (N frames); extra args are --set options.
@@ -64,7 +65,7 @@ serve_s() {
   until grep -q "\"frames\": $n," "$W/serve/summary.json" 2>/dev/null; do sleep 0.02; done
   local t1; t1=$(now)
   kill -TERM $pid; wait $pid
-  echo "$t1 - $t0" | bc -l
+  calc "$t1 - $t0"
 }
 
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -88,8 +89,8 @@ for name in stereo cloud; do
   a=$(printf '%s\n' "${s1[@]}" | median)
   b=$(printf '%s\n' "${s10[@]}" | median)
   printf '%-30s %8d %10.2f %12.2f %12.2f %10.2f %10.2f\n' "sim $name" "$n" \
-    "$(echo "$n / $r" | bc -l)" "$(echo "$n / $a" | bc -l)" "$(echo "$n / $b" | bc -l)" \
-    "$(echo "$r / $a" | bc -l)" "$(echo "$r / $b" | bc -l)"
+    "$(calc "$n / $r")" "$(calc "$n / $a")" "$(calc "$n / $b")" \
+    "$(calc "$r / $a")" "$(calc "$r / $b")"
 done
 
 printf '\n%-30s %10s %14s %14s %16s\n' "restart after" "frames" "restart [ms]" "snapshot [MB]" \
@@ -105,7 +106,7 @@ for n in 100 "$LONG"; do
   kill -TERM $pid; wait $pid
   ms=$(grep -o 'resumed at frame [0-9]* ([0-9]* journalled steps re-applied) in [0-9]* ms' \
     "$W/serve.log" | grep -o '[0-9]* ms' | grep -o '[0-9]*')
-  mb=$(echo "$(stat -c %s "$W/serve/checkpoint/state.bin") / 1000000" | bc -l)
+  mb=$(calc "$(stat -c %s "$W/serve/checkpoint/state.bin") / 1000000")
   # Replaying the same frames, for scale.
   rm -rf "$W/part"; mkdir -p "$W/part/frames"; cp "$W/long/sequence.yaml" "$W/part/"
   awk -v n="$n" '/^#/ || ++k <= n' "$W/long/odometry.tum" >"$W/part/odometry.tum"

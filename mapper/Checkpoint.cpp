@@ -294,11 +294,7 @@ struct CheckpointAccess {
   static void Save(const Mapper& m, Writer* w) {
     w->Put<std::uint64_t>(m.results_.size());
     for (const FrameResult& f : m.results_) PutResult(w, f);
-    w->Put<std::uint8_t>(m.chain_ ? 1 : 0);
-    if (m.chain_) {
-      w->Put<std::uint64_t>(m.chain_->size());
-      for (const ChainStep& s : m.chain_->steps()) PutStep(w, s);
-    }
+    // The chain is not saved: its steps are the results' (every frame chained has one).
     w->Put<double>(m.attitude_.variance());
     w->Put<std::uint8_t>(m.reference_index_ ? 1 : 0);
     w->Put<std::uint64_t>(m.reference_index_.value_or(0));
@@ -351,10 +347,10 @@ struct CheckpointAccess {
     for (FrameResult& f : results) f = GetResult(r);
     m->results_ = std::move(results);
     m->chain_.reset();
-    if (r->Get<std::uint8_t>() != 0) {
-      std::vector<ChainStep> steps(r->Count(r->left()));
-      for (ChainStep& s : steps) s = GetStep(r);
-      if (steps.empty()) r->Fail();
+    if (!m->results_.empty()) {
+      std::vector<ChainStep> steps;
+      steps.reserve(m->results_.size());
+      for (const FrameResult& f : m->results_) steps.push_back(f.step);
       m->chain_ = std::make_unique<PoseChain>(std::move(steps));
     }
     m->attitude_.RestoreVariance(r->Get<double>());
@@ -439,6 +435,14 @@ Checkpoint::Checkpoint(fs::path directory, std::string fingerprint, FaultHook ho
   }
 }
 
+void Checkpoint::CheckFingerprint(const std::string& found, const fs::path& file) const {
+  if (found == fingerprint_) return;
+  throw CheckpointError(file.string() +
+                        ": made with another configuration or sequence.yaml; restart with the "
+                        "same ones, or remove " +
+                        directory_.string() + " to start over");
+}
+
 bool Checkpoint::Exists() const {
   std::error_code ec;
   return fs::exists(directory_ / kSnapshotName, ec) || fs::exists(directory_ / kJournalName, ec);
@@ -464,12 +468,7 @@ DaemonState Checkpoint::Restore(Mapper* mapper,
     }
     Reader body(std::string_view(data).substr(sizeof(kSnapshotMagic), data.size() - 12),
                 snapshot.string());
-    if (body.String() != fingerprint_) {
-      throw CheckpointError(snapshot.string() +
-                            ": made with another configuration or sequence.yaml; restart with "
-                            "the same ones, or remove " +
-                            directory_.string() + " to start over");
-    }
+    CheckFingerprint(body.String(), snapshot);
     state = GetDaemon(&body);
     CheckpointAccess::Restore(&body, mapper, read_frame);
     if (!body.AtEnd()) body.Fail();
@@ -490,12 +489,7 @@ DaemonState Checkpoint::Restore(Mapper* mapper,
     const std::string_view payload(data.data() + offset + sizeof(header), header.length);
     if (Crc32(payload) != header.crc) break;
     Reader r(payload, journal.string());
-    if (r.String() != fingerprint_) {
-      throw CheckpointError(journal.string() +
-                            ": made with another configuration or sequence.yaml; restart with "
-                            "the same ones, or remove " +
-                            directory_.string() + " to start over");
-    }
+    CheckFingerprint(r.String(), journal);
     const DaemonState after = GetDaemon(&r);
     std::optional<FrameResult> frame;
     if (r.Get<std::uint8_t>() != 0) frame = GetResult(&r);

@@ -83,6 +83,8 @@ class Checkpoint {
   const std::filesystem::path& directory() const { return directory_; }
 
  private:
+  /// @throw CheckpointError naming `file` if `found` is not this configuration's fingerprint.
+  void CheckFingerprint(const std::string& found, const std::filesystem::path& file) const;
   void Fault(std::string_view point) const {
     if (hook_) hook_(point);
   }
