@@ -277,6 +277,8 @@ std::vector<KeyEntry> BuildRegistry() {
             "publish the outputs after this many frames (and on exit)");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),
             "snapshot the state after this many frames (each is journalled)");
+  serve.Double("status_interval_s", &V::status_interval_s, "s", AtLeast(0),
+               "rewrite status.json at most this often while frames are queued");
 
   return keys;
 }

@@ -2,6 +2,8 @@
 
 #include <octomap/AbstractOcTree.h>
 
+#include <array>
+#include <cstdint>
 #include <sstream>
 
 #include "dem/QuietStderr.hpp"
@@ -10,7 +12,35 @@
 
 namespace rovermap::io {
 
-void WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree) {
+std::size_t CountSerialisedLeaves(std::string_view data, bool binary) {
+  const std::size_t header_end = data.find("\ndata\n");
+  if (header_end == std::string_view::npos) throw IoError("OcTree data without a 'data' line");
+  const std::string_view body = data.substr(header_end + 6);
+  std::size_t leaves = 0;
+  if (binary) {
+    // Per inner node, two bytes of 2-bit child codes: 01 occupied leaf, 10 free leaf,
+    // 11 inner, 00 none (OccupancyOcTreeBase::writeBinaryNode).
+    static const std::array<std::uint8_t, 256> kLeafCodes = [] {
+      std::array<std::uint8_t, 256> t{};
+      for (int b = 0; b < 256; ++b)
+        for (int i = 0; i < 4; ++i) {
+          const int code = (b >> (2 * i)) & 3;
+          t[b] += code == 1 || code == 2 ? 1 : 0;
+        }
+      return t;
+    }();
+    for (const char c : body) leaves += kLeafCodes[static_cast<unsigned char>(c)];
+    // A root without children is itself the one leaf (two bytes of 00).
+    if (leaves == 0 && !body.empty()) leaves = 1;
+  } else {
+    // Per node in pre-order: its value (a float), then a byte with a bit per existing child.
+    constexpr std::size_t kRecord = sizeof(float) + 1;
+    for (std::size_t i = kRecord - 1; i < body.size(); i += kRecord) leaves += body[i] == 0 ? 1 : 0;
+  }
+  return leaves;
+}
+
+OctoMapFileInfo WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree) {
   std::ostringstream stream(std::ios::out | std::ios::binary);
   const std::string ext = path.extension().string();
   bool ok = false;
@@ -23,7 +53,9 @@ void WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree
     throw IoError(path.string() + ": OctoMap files must end in .bt or .ot");
   }
   if (!ok || !stream) throw IoError(path.string() + ": cannot serialise the OcTree");
-  WriteFileAtomically(path, stream.str());
+  const std::string data = stream.str();
+  WriteFileAtomically(path, data);
+  return {data.size(), CountSerialisedLeaves(data, ext == ".bt")};
 }
 
 std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::filesystem::path& path) {

@@ -136,6 +136,8 @@ void Daemon::Run(const std::atomic<int>& stop) {
       if (index >= state_.next_index && present.Complete(sequence_.sensor_type)) ++waiting_;
     }
     if (Step(files)) continue;
+    // Idle (the queue ran dry or waits on a gap): whoever monitors sees the latest.
+    if (status_stale_) WriteStatus("running", waiting_);
     double wait_s = watcher.watching() ? std::min(o.poll_interval_s, 0.2) : o.poll_interval_s;
     if (gap_since_) {
       const double left_s = o.gap_timeout_s - MsBetween(*gap_since_, Clock::now()) / 1000.0;
@@ -302,7 +304,13 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   }
   if (!writes.str().empty())
     Log("serve: after frame " + std::to_string(result->index) + writes.str());
-  WriteStatus("running", waiting_ > 0 ? waiting_ - 1 : 0);
+  // While frames are queued, status.json at most every status_interval_s: a rewrite per frame
+  // is a file created and renamed per frame, for a monitor that polls far less often.
+  status_stale_ = true;
+  if (!writes.str().empty() ||
+      MsBetween(status_written_, Clock::now()) >= 1000.0 * setup_.serve.status_interval_s) {
+    WriteStatus("running", waiting_ > 0 ? waiting_ - 1 : 0);
+  }
 }
 
 void Daemon::RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files) {
@@ -358,6 +366,8 @@ void Daemon::WriteStatus(const char* state, std::size_t waiting) {
       {"updated", UtcNow()}};
   // Rewritten after every frame and only for watching: not worth a flush to disk each time.
   io::WriteFileAtomically(setup_.out / "status.json", status.dump(2) + "\n", /*flush=*/false);
+  status_stale_ = false;
+  status_written_ = Clock::now();
 }
 
 }  // namespace rovermap::mapper

@@ -102,6 +102,8 @@ class Daemon {
   double last_timestamp_ = -1e300;
   std::string last_frame_time_;  // UTC, ISO 8601
   std::size_t waiting_ = 0;
+  bool status_stale_ = false;  // a frame done since status.json was written
+  Clock::time_point status_written_{};
 };
 
 }  // namespace rovermap::mapper

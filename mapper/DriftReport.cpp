@@ -139,7 +139,7 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
       {"peak_rss_mb", run.peak_rss_mb},
       {"dem",
-       {{"cells", map.PublishedCellCount()},
+       {{"cells", run.dem_cells ? *run.dem_cells : map.PublishedCellCount()},
         {"cells_reached", map.CellCount()},
         {"tiles", map.TileCount()},
         {"cell_size_m", map.options().cell_size_m},
@@ -149,8 +149,9 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
     summary["stereo"] = {{"num_disparities", mapper.sensor().stereo.num_disparities}};
   }
   if (const auto* tree = mapper.octomap().tree()) {
-    summary["octomap"] = {{"leaves", tree->getNumLeafNodes()},
-                          {"resolution_m", tree->getResolution()}};
+    summary["octomap"] = {
+        {"leaves", run.octomap_leaves ? *run.octomap_leaves : tree->getNumLeafNodes()},
+        {"resolution_m", tree->getResolution()}};
   }
   if (drift) {
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},

@@ -37,6 +37,10 @@ struct RunInfo {
   double wall_ms = 0.0;      ///< whole run, reading included
   double write_ms = 0.0;     ///< writing the outputs before summary.json
   double peak_rss_mb = 0.0;  ///< PeakRssMb() at the end
+  // What the writers counted as they wrote (WriteOutputs fills them); when absent, Summary
+  // counts in the maps, a walk over every cell and every OcTree node.
+  std::optional<std::size_t> dem_cells;             ///< published DEM cells [count]
+  std::optional<std::size_t> octomap_leaves;        ///< OcTree leaves [count]
   nlohmann::json extra = nlohmann::json::object();  ///< more top-level keys (serve's queue)
 };
 

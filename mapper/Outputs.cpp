@@ -43,10 +43,12 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
   done("drift.csv");
 
-  io::WriteDemGeoTiff(out_dir / "dem.tif", mapper.elevation_map(), mapper.georeference());
+  run.dem_cells =
+      io::WriteDemGeoTiff(out_dir / "dem.tif", mapper.elevation_map(), mapper.georeference())
+          .valid_cells;
   done("dem.tif");
   if (const octomap::OcTree* tree = mapper.octomap().tree()) {
-    io::WriteOctoMap(out_dir / "map.bt", *tree);
+    run.octomap_leaves = io::WriteOctoMap(out_dir / "map.bt", *tree).leaves;
     done("map.bt");
     if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
   }

@@ -18,6 +18,9 @@ struct ServeOptions {
   /// restart never registers a frame twice; a larger value writes less, and a restart re-fuses
   /// up to this many frames).
   int checkpoint_every = 10;
+  /// [s] while frames are queued, status.json is rewritten at most this often (0: after every
+  /// frame); it is always rewritten when the queue runs dry, at a publication and on exit.
+  double status_interval_s = 1.0;
 };
 
 }  // namespace rovermap::mapper

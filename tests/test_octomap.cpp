@@ -6,10 +6,10 @@
 #include <limits>
 #include <vector>
 
-#include "tests/support/ScratchDir.hpp"
 #include "dem/OctoMapFusion.hpp"
 #include "io/IoError.hpp"
 #include "io/OctoMapIo.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap {
 namespace {
@@ -112,6 +112,25 @@ TEST(OctoMapIo, BinaryAndFullTreesReadBack) {
   for (const auto& entry : fs::directory_iterator(TempDir())) {
     EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
   }
+}
+
+// The leaf count read from the written bytes is the tree's own, for both formats: after one
+// frame, after several from other origins (deeper, partly pruned trees), and for an empty tree.
+TEST(OctoMapIo, LeavesCountedInTheWrittenBytes) {
+  dem::OctoMapFusion fusion;
+  for (int frame = 0; frame <= 3; ++frame) {
+    if (frame > 0) fusion.InsertFrame(Ground(), {0.4 * frame, -0.3 * frame, 1.5});
+    const octomap::OcTree& tree = *fusion.tree();
+    for (const char* name : {"map.bt", "map.ot"}) {
+      const io::OctoMapFileInfo info = io::WriteOctoMap(TempDir() / name, tree);
+      EXPECT_EQ(info.leaves, tree.getNumLeafNodes()) << name << " after " << frame << " frames";
+      EXPECT_EQ(info.bytes, fs::file_size(TempDir() / name)) << name;
+    }
+    if (frame > 0) {
+      EXPECT_GT(tree.getNumLeafNodes(), 100u);
+    }
+  }
+  EXPECT_THROW(io::CountSerialisedLeaves("no data line", true), io::IoError);
 }
 
 TEST(OctoMapIo, Errors) {

@@ -16,6 +16,7 @@
 
 #include "eval/DemComparison.hpp"
 #include "io/GeoTiff.hpp"
+#include "io/OctoMapIo.hpp"
 #include "io/Tum.hpp"
 #include "mapper/PoseChain.hpp"
 #include "tests/support/CommandFixture.hpp"
@@ -164,6 +165,13 @@ TEST_F(Replay, TinyStereoSequence) {
   EXPECT_EQ(summary["bad_frames"], 0);
   EXPECT_GT(summary["timing"]["stereo"]["total_ms"].get<double>(), 0.0);
   EXPECT_GT(summary["dem"]["cells"].get<int>(), 1000);
+  // The counts summary.json takes from the writers are the files' own.
+  const rovermap::io::DemRaster dem = rovermap::io::ReadDemGeoTiff(dir_ / "out" / "dem.tif");
+  std::size_t valid = 0;
+  for (const float z : dem.elevation_m) valid += std::isfinite(z) ? 1 : 0;
+  EXPECT_EQ(summary["dem"]["cells"].get<std::size_t>(), valid);
+  EXPECT_EQ(summary["octomap"]["leaves"].get<std::size_t>(),
+            rovermap::io::ReadOctoMap(dir_ / "out" / "map.bt")->getNumLeafNodes());
 }
 
 TEST_F(Replay, NonEmptyOutputNeedsForce) {

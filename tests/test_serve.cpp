@@ -4,6 +4,7 @@
 // with outputs; bad frames go to rejected/; a gap times out; a second daemon is refused.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/inotify.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -243,6 +244,41 @@ TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
   EXPECT_EQ(CountLines(Slurp(dir_ / "log"), "serve: frame "), 5);
 }
 
+// status.json with frames queued: at most every serve.status_interval_s (here never), yet
+// current as soon as the queue runs dry. Its writes are counted with inotify, as temporaries
+// created in OUT (each has its own name: identical events would be merged).
+TEST_F(Serve, StatusJsonRateLimitedWhileBusyCurrentWhenIdle) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox");
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  const int watch = ::inotify_init1(IN_NONBLOCK);
+  ASSERT_GE(watch, 0);
+  ASSERT_GE(::inotify_add_watch(watch, out.c_str(), IN_CREATE), 0);
+  const pid_t pid = Start(inbox, out, "log",
+                          {"--set", "serve.status_interval_s=1000", "--set",
+                           "serve.publish_every=100", "--set", "serve.checkpoint_every=100"});
+  const nlohmann::json status = WaitForNext(out, 5);
+  ASSERT_FALSE(status.is_null()) << Slurp(dir_ / "log");
+  EXPECT_EQ(status["frames_done"], 5);
+  EXPECT_EQ(status["last_frame"], 4);
+  EXPECT_EQ(status["frames_waiting"], 0);
+  int writes = 0;
+  alignas(inotify_event) char buffer[8192];
+  for (ssize_t n; (n = ::read(watch, buffer, sizeof(buffer))) > 0;) {
+    for (char* p = buffer; p < buffer + n;) {
+      const auto* event = reinterpret_cast<const inotify_event*>(p);
+      if (event->len > 0 && std::string(event->name).rfind("status.json.tmp-", 0) == 0) ++writes;
+      p += sizeof(inotify_event) + event->len;
+    }
+  }
+  ::close(watch);
+  // At the start and when the queue ran dry (once or twice, as the frames were found); a
+  // rewrite per frame would make at least 6.
+  EXPECT_GE(writes, 2);
+  EXPECT_LE(writes, 4);
+  Stop(pid);
+}
+
 // kill -9 at each kind of point, then a restart on the same OUT: the result is the
 // uninterrupted run's, and every frame is logged as done exactly once over the two runs.
 TEST_F(Serve, KillNineAtAnyPointThenRestartLosesNothing) {
@@ -419,9 +455,14 @@ TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
 
 TEST_F(Serve, SigtermWhileWaitingForTheSequenceExitsZero) {
   const pid_t pid = Start(dir_ / "empty-inbox", dir_ / "out", "log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  Stop(pid);
+  // Signalled once it says it waits (a fixed sleep lost the race on a loaded machine).
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (Slurp(dir_ / "log").find("waiting for") == std::string::npos &&
+         std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   EXPECT_NE(Slurp(dir_ / "log").find("waiting for"), std::string::npos);
+  Stop(pid);
 }
 
 }  // namespace
