@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "dem/OcTreeBytes.hpp"
 #include "dem/QuietStderr.hpp"
 
 namespace rovermap::dem {
@@ -84,7 +85,10 @@ void OctoMapFusion::UpdateInner() const {
 bool OctoMapFusion::Save(std::ostream& out) const {
   const std::int32_t schedule[2] = {frames_since_update_, inner_stale_ ? 1 : 0};
   out.write(reinterpret_cast<const char*>(schedule), sizeof(schedule));
-  if (tree_) tree_->write(out);
+  if (tree_) {
+    const std::string bytes = FullOcTreeBytes(*tree_);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
   return static_cast<bool>(out);
 }
 

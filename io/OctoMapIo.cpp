@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <sstream>
 
+#include "dem/OcTreeBytes.hpp"
 #include "dem/QuietStderr.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
@@ -18,8 +19,8 @@ std::size_t CountSerialisedLeaves(std::string_view data, bool binary) {
   const std::string_view body = data.substr(header_end + 6);
   std::size_t leaves = 0;
   if (binary) {
-    // Per inner node, two bytes of 2-bit child codes: 01 occupied leaf, 10 free leaf,
-    // 11 inner, 00 none (OccupancyOcTreeBase::writeBinaryNode).
+    // Per inner node, two bytes of 2-bit child codes: 1 free leaf, 2 occupied leaf, 3 inner,
+    // 0 none (dem/OcTreeBytes).
     static const std::array<std::uint8_t, 256> kLeafCodes = [] {
       std::array<std::uint8_t, 256> t{};
       for (int b = 0; b < 256; ++b)
@@ -41,19 +42,11 @@ std::size_t CountSerialisedLeaves(std::string_view data, bool binary) {
 }
 
 OctoMapFileInfo WriteOctoMap(const std::filesystem::path& path, const octomap::OcTree& tree) {
-  std::ostringstream stream(std::ios::out | std::ios::binary);
   const std::string ext = path.extension().string();
-  bool ok = false;
-  if (ext == ".bt") {
-    const dem::QuietStderr quiet;  // liboctomap prints " done." after a binary write
-    ok = tree.writeBinaryConst(stream);
-  } else if (ext == ".ot") {
-    ok = tree.write(stream);
-  } else {
+  if (ext != ".bt" && ext != ".ot") {
     throw IoError(path.string() + ": OctoMap files must end in .bt or .ot");
   }
-  if (!ok || !stream) throw IoError(path.string() + ": cannot serialise the OcTree");
-  const std::string data = stream.str();
+  const std::string data = ext == ".bt" ? dem::BinaryOcTreeBytes(tree) : dem::FullOcTreeBytes(tree);
   WriteFileAtomically(path, data);
   return {data.size(), CountSerialisedLeaves(data, ext == ".bt")};
 }

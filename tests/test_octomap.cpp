@@ -4,9 +4,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <vector>
 
+#include "dem/OcTreeBytes.hpp"
 #include "dem/OctoMapFusion.hpp"
+#include "dem/QuietStderr.hpp"
 #include "io/IoError.hpp"
 #include "io/OctoMapIo.hpp"
 #include "tests/support/ScratchDir.hpp"
@@ -112,6 +115,30 @@ TEST(OctoMapIo, BinaryAndFullTreesReadBack) {
   for (const auto& entry : fs::directory_iterator(TempDir())) {
     EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos) << entry.path();
   }
+}
+
+// Our writers give OctoMap's own bytes, for both formats, on trees of several shapes (with
+// inner nodes stale and up to date, occupied and free leaves, pruned parts) and an empty one.
+TEST(OcTreeBytes, SameBytesAsOctoMapsWriters) {
+  dem::OctoMapFusion fusion;
+  for (int frame = 0; frame <= 3; ++frame) {
+    if (frame > 0) fusion.InsertFrame(Ground(), {0.5 * frame, 0.2 * frame, 1.0 + 0.3 * frame});
+    const octomap::OcTree& tree = *fusion.tree();
+    std::ostringstream full, binary;
+    ASSERT_TRUE(tree.write(full));
+    {
+      const dem::QuietStderr quiet;
+      ASSERT_TRUE(tree.writeBinaryConst(binary));
+    }
+    EXPECT_EQ(dem::FullOcTreeBytes(tree), full.str()) << frame << " frames";
+    EXPECT_EQ(dem::BinaryOcTreeBytes(tree), binary.str()) << frame << " frames";
+  }
+  // Stale inner nodes (the fusion updates them only when read): the .ot keeps them as they are.
+  octomap::OcTree raw(0.05);
+  for (int i = 0; i < 200; ++i) raw.updateNode(0.01 * i, 0.02 * (i % 17), 0.3, i % 3 != 0, true);
+  std::ostringstream full;
+  ASSERT_TRUE(raw.write(full));
+  EXPECT_EQ(dem::FullOcTreeBytes(raw), full.str());
 }
 
 // The leaf count read from the written bytes is the tree's own, for both formats: after one
