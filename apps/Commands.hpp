@@ -1,6 +1,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,13 @@ CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError / mapper::DaemonBusyError; returns the
 /// exit status.
 int RunServe(const ServeArgs& args);
+
+/// `--out DIR` before any work: DIR must be a directory or creatable (its nearest existing
+/// ancestor a directory we may write into) and, unless `force`, empty. @return true if DIR
+/// holds files (then `force` was given). @throw UsageError if DIR is not a directory, or is not
+/// empty without --force (`force_hint`: what --force does); io::IoError if DIR cannot be created.
+bool CheckOutputDirectory(const std::filesystem::path& out, bool force,
+                          const std::string& force_hint);
 
 /// The pipeline's options (mapper, registration, stereo, dem, octomap) out of a configuration:
 /// replay and serve run the same pipeline.

@@ -65,20 +65,6 @@ class Progress {
   std::size_t width_ = 0;
 };
 
-// OUT must be creatable and, unless --force, empty; nothing is created before the sequence has
-// been checked.
-void CheckOutputDirectory(const std::filesystem::path& out, bool force) {
-  namespace fs = std::filesystem;
-  std::error_code error;
-  if (!fs::exists(out, error)) return;
-  if (!fs::is_directory(out, error))
-    throw UsageError("--out " + out.string() + ": not a directory");
-  if (!force && !fs::is_empty(out, error)) {
-    throw UsageError("--out " + out.string() +
-                     ": directory is not empty (use --force to overwrite its outputs)");
-  }
-}
-
 // The figures a rover engineer looks at first, on stderr after the run.
 void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
   std::ostringstream line;
@@ -136,7 +122,7 @@ int RunReplay(const ReplayArgs& args) {
                              : std::optional<std::filesystem::path>(args.config.config_file),
                          args.config.overrides);
   const std::filesystem::path out(args.out);
-  CheckOutputDirectory(out, args.force);
+  CheckOutputDirectory(out, args.force, "overwrite its outputs");
   // Opening validates the whole sequence (calibration, poses, frame files) before any output.
   io::SequenceReader reader{std::filesystem::path(args.sequence)};
   std::unique_ptr<mapper::Mapper> mapper;

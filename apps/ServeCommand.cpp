@@ -5,6 +5,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <string_view>
@@ -82,6 +83,13 @@ int RunServe(const ServeArgs& args) {
                              ? std::nullopt
                              : std::optional<std::filesystem::path>(args.config.config_file),
                          args.config.overrides);
+  // The inbox may not exist yet (it is created), but a file in its place would be waited on
+  // for ever.
+  std::error_code error;
+  if (std::filesystem::exists(args.inbox, error) &&
+      !std::filesystem::is_directory(args.inbox, error)) {
+    throw UsageError("--inbox " + args.inbox + ": not a directory");
+  }
   InstallSignalHandlers();
   mapper::DaemonSetup setup;
   setup.inbox = args.inbox;

@@ -38,16 +38,9 @@ int RunSimulate(const SimulateArgs& args) {
                          args.config.overrides);
   namespace fs = std::filesystem;
   const fs::path out(args.out);
-  std::error_code error;
-  if (fs::exists(out, error)) {
-    if (!fs::is_directory(out, error)) throw UsageError("--out " + args.out + ": not a directory");
-    if (!fs::is_empty(out, error)) {
-      if (!args.force) {
-        throw UsageError("--out " + args.out +
-                         ": directory is not empty (use --force to replace its sequence)");
-      }
-      fs::remove_all(out / "frames", error);
-    }
+  if (CheckOutputDirectory(out, args.force, "replace its sequence")) {
+    std::error_code error;
+    fs::remove_all(out / "frames", error);
   }
 
   const auto start = std::chrono::steady_clock::now();

@@ -3,6 +3,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -133,14 +135,19 @@ void Apply(Config& config, Source& source, const std::string& key, const YAML::N
 void ApplyFile(Config& config, const std::filesystem::path& file) {
   Source source{file.string(), {}};
   std::error_code error;
-  if (!std::filesystem::exists(file, error)) {
-    throw ConfigError(source.file + ": no such config file");
+  const auto status = std::filesystem::status(file, error);
+  // Only "not found" means missing: a directory we may not enter (EACCES) hides the file.
+  if (error && error != std::errc::no_such_file_or_directory) {
+    throw ConfigError(source.file + ": cannot access config file (" + error.message() + ")");
   }
-  if (std::filesystem::is_directory(file, error)) {
+  if (!std::filesystem::exists(status)) throw ConfigError(source.file + ": no such config file");
+  if (std::filesystem::is_directory(status)) {
     throw ConfigError(source.file + ": is a directory, not a config file");
   }
   std::ifstream stream(file);
-  if (!stream) throw ConfigError(source.file + ": cannot read config file");
+  if (!stream) {
+    throw ConfigError(source.file + ": cannot read config file (" + std::strerror(errno) + ")");
+  }
 
   YAML::Node root;
   try {

@@ -106,6 +106,10 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
   const Reader r(path.string());
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
+    // EACCES on the directory is not "missing": say what the system said.
+    if (error && error != std::errc::no_such_file_or_directory) {
+      throw ConfigError(path.string() + ": cannot access (" + error.message() + ")");
+    }
     throw ConfigError(path.string() + ": missing (every sequence needs a sequence.yaml)");
   }
   std::ifstream stream(path);

@@ -31,7 +31,9 @@ std::map<std::size_t, InboxFrameFiles> Inbox::Scan() const {
   std::map<std::size_t, InboxFrameFiles> found;
   std::error_code ec;
   fs::directory_iterator it(frames_dir(), ec);
-  if (ec) return found;
+  // No frames/ yet: nothing has arrived. Any other error (EACCES) would hide every frame.
+  if (ec == std::errc::no_such_file_or_directory) return found;
+  if (ec) throw IoError(frames_dir().string() + ": cannot list (" + ec.message() + ")");
   for (const fs::directory_entry& entry : it) {
     std::size_t index = 0;
     std::string kind;

@@ -40,8 +40,8 @@ class Inbox {
   std::filesystem::path rejected_dir() const { return directory_ / "rejected"; }
   std::filesystem::path sequence_yaml() const { return directory_ / "sequence.yaml"; }
 
-  /// The frame files present, by index (dot-names and other files ignored). Never throws: an
-  /// unreadable or missing frames/ is empty.
+  /// The frame files present, by index (dot-names and other files ignored); a missing frames/
+  /// is empty. @throw IoError naming frames/ if it exists but cannot be listed (EACCES).
   std::map<std::size_t, InboxFrameFiles> Scan() const;
 
   /// The frame's odometry line (and ground truth when `files.gt`).

@@ -139,7 +139,9 @@ SequenceReader::SequenceReader(const fs::path& sequence_dir) {
   }
   const bool stereo = info_.sensor_type == SensorType::kStereo;
   std::map<std::size_t, FrameFiles> found;
-  for (const fs::directory_entry& entry : fs::directory_iterator(frames_dir)) {
+  fs::directory_iterator listing(frames_dir, error);
+  if (error) throw IoError(frames_dir.string() + ": cannot list (" + error.message() + ")");
+  for (const fs::directory_entry& entry : listing) {
     const std::string name = entry.path().filename().string();
     std::size_t index = 0;
     std::string kind;

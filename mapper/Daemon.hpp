@@ -63,7 +63,7 @@ class Daemon {
   void Resume();
   /// Processes frames until `stop` turns non-zero; then the frame in hand is finished, the
   /// state checkpointed and the outputs published before it returns (after Resume).
-  /// @throw io::IoError if OUT cannot be written.
+  /// @throw io::IoError if OUT cannot be written or the inbox's frames/ cannot be listed.
   void Run(const std::atomic<int>& stop);
 
   /// How long restoring the checkpoint took [ms] (0 before Run, or without a checkpoint).

@@ -50,13 +50,18 @@ void SensorToBody(registration::PointCloud* cloud, const Eigen::Isometry3d& T_bo
   for (auto& c : cloud->covariances) c = R * c * R.transpose();
 }
 
+// "frames/000003.ply: no usable points": a bad frame's reason names its file (DESIGN §5).
+std::string AboutFile(const io::Frame& frame, const std::string& reason) {
+  return frame.file.empty() ? reason : frame.file.string() + ": " + reason;
+}
+
 }  // namespace
 
 LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::size_t min_points) {
   LoadedFrame out;
   if (setup.type == io::SensorType::kStereo) {
     if (!setup.camera) {
-      out.reason = "stereo sequence without a camera model";
+      out.reason = AboutFile(frame, "stereo sequence without a camera model");
       return out;
     }
     const io::CameraModel& c = *setup.camera;
@@ -67,7 +72,7 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     out.stereo_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (points.status != stereo::StereoStatus::kOk) {
-      out.reason = "stereo: " + points.message;
+      out.reason = AboutFile(frame, "stereo: " + points.message);
       return out;
     }
     out.input_points = points.pixels;
@@ -88,6 +93,7 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
                                  " < mapper.min_points " + std::to_string(min_points) + ")");
     if (out.dropped_nonfinite > 0)
       out.reason += ", " + std::to_string(out.dropped_nonfinite) + " non-finite dropped";
+    out.reason = AboutFile(frame, out.reason);
     return out;
   }
   out.ok = true;

@@ -21,23 +21,16 @@
 #include <vector>
 
 #include "io/GeoTiff.hpp"
-#include "tests/support/CommandFixture.hpp"
+#include "tests/support/ServeFixture.hpp"
 
 namespace fs = std::filesystem;
+using rovermap::testing::DataLines;
 using rovermap::testing::Slurp;
 
 namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";    // 5 frames
 const fs::path kTinyStereo = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo";  // 3 frames
-
-std::vector<std::string> DataLines(const fs::path& p) {
-  std::vector<std::string> lines;
-  std::istringstream in(Slurp(p));
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') lines.push_back(line);
-  return lines;
-}
 
 // Lines of `text` that start with `prefix` and hold one of `words` (std::regex would do, but
 // GCC 12 warns inside <regex> in the sanitizer build).
@@ -57,108 +50,8 @@ int CountLines(const std::string& text, const std::string& prefix,
   return n;
 }
 
-class Serve : public rovermap::testing::CommandFixture {
+class Serve : public rovermap::testing::ServeFixture {
  protected:
-  void TearDown() override {
-    for (pid_t pid : running_) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-    CommandFixture::TearDown();
-  }
-
-  // A file put into the inbox the way a producer must: written under a dot-name, renamed in.
-  static void Drop(const fs::path& to, const std::string& contents) {
-    const fs::path temp = to.parent_path() / ("." + to.filename().string());
-    std::ofstream(temp, std::ios::binary) << contents;
-    fs::rename(temp, to);
-  }
-
-  // Frame k of `sequence` into the inbox: its data files, its ground-truth line, its odometry.
-  static void DropFrame(const fs::path& sequence, const fs::path& inbox, std::size_t k) {
-    char stem[16];
-    std::snprintf(stem, sizeof(stem), "%06zu", k);
-    fs::create_directories(inbox / "frames");
-    for (const char* ext : {".left.png", ".right.png", ".ply"}) {
-      const fs::path from = sequence / "frames" / (std::string(stem) + ext);
-      if (fs::exists(from)) Drop(inbox / "frames" / from.filename(), Slurp(from));
-    }
-    Drop(inbox / "frames" / (std::string(stem) + ".gt"),
-         DataLines(sequence / "groundtruth.tum").at(k) + "\n");
-    Drop(inbox / "frames" / (std::string(stem) + ".odom"),
-         DataLines(sequence / "odometry.tum").at(k) + "\n");
-  }
-
-  fs::path MakeInbox(const fs::path& sequence, std::size_t frames, const std::string& name) {
-    const fs::path inbox = dir_ / name;
-    fs::create_directories(inbox);
-    Drop(inbox / "sequence.yaml", Slurp(sequence / "sequence.yaml"));
-    for (std::size_t k = 0; k < frames; ++k) DropFrame(sequence, inbox, k);
-    return inbox;
-  }
-
-  // `rovermap serve` in the background, stderr appended to `log`; `fault` sets the kill hook.
-  pid_t Start(const fs::path& inbox, const fs::path& out, const std::string& log,
-              const std::vector<std::string>& extra = {}, const std::string& fault = "") {
-    std::vector<std::string> args = {ROVERMAP_EXECUTABLE,
-                                     "serve",
-                                     "--inbox",
-                                     inbox.string(),
-                                     "--out",
-                                     out.string(),
-                                     "--set",
-                                     "serve.poll_interval_s=0.05"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      std::vector<char*> argv;
-      for (std::string& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      if (!fault.empty()) ::setenv("ROVERMAP_FAULT_KILL", fault.c_str(), 1);
-      std::FILE* err = std::fopen((dir_ / log).c_str(), "a");
-      if (err != nullptr) ::dup2(fileno(err), 2);
-      std::FILE* out_null = std::fopen("/dev/null", "w");
-      if (out_null != nullptr) ::dup2(fileno(out_null), 1);
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    running_.push_back(pid);
-    return pid;
-  }
-
-  // Exit status (128 + signal when killed); -1 if still running after `timeout_s`.
-  int WaitExit(pid_t pid, double timeout_s = 60.0) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < until) {
-      int status = 0;
-      if (::waitpid(pid, &status, WNOHANG) == pid) {
-        running_.erase(std::remove(running_.begin(), running_.end(), pid), running_.end());
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return -1;
-  }
-
-  // status.json once its next_frame reached `next` (null json on timeout).
-  nlohmann::json WaitForNext(const fs::path& out, std::size_t next, double timeout_s = 60.0) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < until) {
-      if (fs::exists(out / "status.json")) {
-        const nlohmann::json s = nlohmann::json::parse(Slurp(out / "status.json"), nullptr, false);
-        if (!s.is_discarded() && s.value("next_frame", std::size_t{0}) >= next) return s;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return nullptr;
-  }
-
-  // SIGTERM: the daemon finishes, publishes, checkpoints and exits 0.
-  void Stop(pid_t pid) {
-    ::kill(pid, SIGTERM);
-    EXPECT_EQ(WaitExit(pid), 0);
-  }
-
   fs::path Replay(const fs::path& sequence, const std::vector<std::string>& sets = {}) {
     const fs::path out = dir_ / "replay";
     std::string args = "replay " + sequence.string() + " --out " + out.string();
@@ -212,8 +105,6 @@ class Serve : public rovermap::testing::CommandFixture {
     const std::size_t end = line.find(',', start);
     return line.substr(0, start) + (end == std::string::npos ? "" : line.substr(end + 1));
   }
-
-  std::vector<pid_t> running_;
 };
 
 TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
@@ -455,12 +346,10 @@ TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
 
 TEST_F(Serve, SigtermWhileWaitingForTheSequenceExitsZero) {
   const pid_t pid = Start(dir_ / "empty-inbox", dir_ / "out", "log");
-  // Signalled once it says it waits (a fixed sleep lost the race on a loaded machine).
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (Slurp(dir_ / "log").find("waiting for") == std::string::npos &&
-         std::chrono::steady_clock::now() < until) {
+  // Signalled only once it says it waits: a fixed 300 ms was, on a loaded machine, before the
+  // handlers were installed (killed, 143).
+  for (int i = 0; i < 1500 && Slurp(dir_ / "log").find("waiting for") == std::string::npos; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
   EXPECT_NE(Slurp(dir_ / "log").find("waiting for"), std::string::npos);
   Stop(pid);
 }
