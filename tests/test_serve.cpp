@@ -23,20 +23,13 @@
 #include "tests/support/CommandFixture.hpp"
 
 namespace fs = std::filesystem;
+using rovermap::testing::DataLines;
 using rovermap::testing::Slurp;
 
 namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";    // 5 frames
 const fs::path kTinyStereo = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo";  // 3 frames
-
-std::vector<std::string> DataLines(const fs::path& p) {
-  std::vector<std::string> lines;
-  std::istringstream in(Slurp(p));
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') lines.push_back(line);
-  return lines;
-}
 
 // Lines of `text` that start with `prefix` and hold one of `words` (std::regex would do, but
 // GCC 12 warns inside <regex> in the sanitizer build).

@@ -34,6 +34,7 @@
 
 namespace fs = std::filesystem;
 using namespace rovermap;
+using rovermap::testing::DataLines;
 using rovermap::testing::Slurp;
 
 namespace {
@@ -183,14 +184,6 @@ std::vector<std::string> Temporaries(const fs::path& dir) {
     }
   }
   return found;
-}
-
-std::vector<std::string> DataLines(const fs::path& p) {
-  std::vector<std::string> lines;
-  std::istringstream in(Slurp(p));
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') lines.push_back(line);
-  return lines;
 }
 
 mapper::PipelineOptions Defaults() {
