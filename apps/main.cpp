@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 
@@ -23,6 +24,9 @@ void rovermap::apps::AddConfigOptions(CLI::App* cmd, ConfigArgs* args) {
 }
 
 int main(int argc, char** argv) {
+  // Past a file-size limit (ulimit -f) write() fails with EFBIG, reported like a full disk,
+  // instead of the signal killing the process in the middle of a write.
+  std::signal(SIGXFSZ, SIG_IGN);
   // OpenMP threads that finish a parallel loop first spin for the others by default; on a shared
   // 2-core machine (a rover's computer runs more than the mapper) the spinning thread takes the
   // core its partner needs: a loaded machine replayed the simulated cloud traverse at 8 frames/s

@@ -1,22 +1,20 @@
 #include "io/GeoTiff.hpp"
 
-#include "io/FileUtil.hpp"
-
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
+#include <cpl_vsi.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
-#include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <random>
 #include <stdexcept>
-#include <system_error>
 
+#include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 
 namespace rovermap::io {
@@ -54,11 +52,10 @@ class QuietGdal {
   throw IoError(path.string() + ": " + what + QuietGdal::Last());
 }
 
-std::filesystem::path TempPath(const std::filesystem::path& path) {
-  std::random_device device;
-  std::filesystem::path temp = path;
-  temp += ".tmp-" + std::to_string(device() % 1000000000u) + ".tif";
-  return temp;
+// A name in GDAL's in-memory file system, unique within the process.
+std::string MemoryFileName() {
+  static std::atomic<unsigned> counter{0};
+  return "/vsimem/rovermap_dem_" + std::to_string(counter.fetch_add(1)) + ".tif";
 }
 
 }  // namespace
@@ -171,21 +168,29 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
   create =
       CSLSetNameValue(create, "NUM_THREADS",
                       options.threads > 0 ? std::to_string(options.threads).c_str() : "ALL_CPUS");
-  const std::filesystem::path temp = TempPath(path);
-  GDALDataset* out =
-      cog_driver->CreateCopy(temp.c_str(), mem.get(), FALSE, create, nullptr, nullptr);
-  CSLDestroy(create);
-  if (out == nullptr) {
-    ::unlink(temp.c_str());
-    Fail(path, "GDAL cannot write the GeoTIFF");
-  }
+  // GDAL writes the GeoTIFF into memory, and WriteFileAtomically puts it on disk: GDAL 3.6 does
+  // not report a short write to a file (a full disk or a file-size limit left a truncated
+  // dem.tif in place, measured), whereas WriteFileAtomically checks every write, flushes, and
+  // removes its temporary on failure.
+  const std::string memory_file = MemoryFileName();
   CPLErrorReset();
-  GDALClose(GDALDataset::ToHandle(out));  // returns void in GDAL 3.6: check the error state
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    ::unlink(temp.c_str());
-    Fail(path, "GDAL cannot finish the GeoTIFF");
+  GDALDataset* out =
+      cog_driver->CreateCopy(memory_file.c_str(), mem.get(), FALSE, create, nullptr, nullptr);
+  CSLDestroy(create);
+  bool written = out != nullptr && CPLGetLastErrorType() < CE_Failure;
+  const std::string copy_error = QuietGdal::Last();
+  if (out != nullptr) GDALClose(GDALDataset::ToHandle(out));  // void in GDAL 3.6: check the state
+  written = written && CPLGetLastErrorType() < CE_Failure;
+  vsi_l_offset size = 0;
+  GByte* bytes = VSIGetMemFileBuffer(memory_file.c_str(), &size, /*bUnlinkAndSeize=*/TRUE);
+  const std::unique_ptr<GByte, decltype(&VSIFree)> owned(bytes, &VSIFree);
+  if (!written || bytes == nullptr) {
+    VSIUnlink(memory_file.c_str());
+    throw IoError(path.string() + ": GDAL cannot write the GeoTIFF" +
+                  (copy_error.empty() ? QuietGdal::Last() : copy_error));
   }
-  CommitTemporaryFile(temp, path);
+  WriteFileAtomically(
+      path, std::string_view(reinterpret_cast<const char*>(bytes), static_cast<std::size_t>(size)));
   return info;
 }
 

@@ -1,6 +1,7 @@
 #include "mapper/Checkpoint.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -529,6 +530,12 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
   const fs::path journal = directory_ / kJournalName;
   const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
   if (fd < 0) throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  struct stat before {};
+  if (::fstat(fd, &before) != 0) {
+    const int err = errno;
+    ::close(fd);
+    throw io::IoError(journal.string() + ": cannot stat (" + std::strerror(err) + ")");
+  }
   try {
     WriteAll(fd, reinterpret_cast<const char*>(&header), sizeof(header), journal);
     Fault("journal:partial");
@@ -537,6 +544,10 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
       throw io::IoError(journal.string() + ": cannot flush (" + std::strerror(errno) + ")");
     }
   } catch (...) {
+    // A record cut short (full disk, file-size limit) is cut off: left there, it would hide
+    // every record appended after it from Restore, which stops at the first damaged one (if
+    // this fails too, Restore still drops it as the last record).
+    [[maybe_unused]] const int cut = ::ftruncate(fd, before.st_size);
     ::close(fd);
     throw;
   }

@@ -67,7 +67,8 @@ class Checkpoint {
 
   /// Journals one step of the daemon: `frame` (nullptr for an index declared missing without
   /// a pose) and the daemon's state after it. Flushed to disk before it returns.
-  /// @throw io::IoError naming the journal.
+  /// @throw io::IoError naming the journal; the record cut short is cut off, so the journal
+  ///        ends with the previous record and a later append follows it.
   void Append(const FrameResult* frame, const DaemonState& after);
 
   /// Writes a snapshot of `mapper` and `state`, then empties the journal.

@@ -23,5 +23,43 @@ echo "install_deps: installing ${missing[*]}" >&2
 sudo_cmd=()
 [[ $(id -u) -ne 0 ]] && sudo_cmd=(sudo)
 export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+# Another apt or dpkg run holding the package manager's locks (unattended-upgrades on a freshly
+# booted machine) is waited for, at most ROVERMAP_APT_LOCK_WAIT_S seconds, instead of failing
+# at once. apt-get waits for dpkg's lock itself (DPkg::Lock::Timeout) but not for the lists
+# lock `apt-get update` takes (apt 2.6, measured): a failure naming a lock is retried every
+# ROVERMAP_APT_LOCK_POLL_S seconds until the deadline.
+lock_wait_s="${ROVERMAP_APT_LOCK_WAIT_S:-600}"
+lock_poll_s="${ROVERMAP_APT_LOCK_POLL_S:-5}"
+lock_deadline=$((SECONDS + lock_wait_s))
+
+apt_get() {
+  local errors timeout=0 waiting=""
+  errors=$(mktemp)
+  while true; do
+    if "${sudo_cmd[@]}" apt-get -o DPkg::Lock::Timeout="$timeout" "$@" 2>"$errors"; then
+      cat "$errors" >&2
+      rm -f "$errors"
+      return 0
+    fi
+    if ! grep -q "Could not get lock" "$errors" || ((SECONDS >= lock_deadline)); then
+      [[ -n $waiting ]] && echo "install_deps: gave up waiting for the package manager's lock" \
+        "after ${lock_wait_s} s (ROVERMAP_APT_LOCK_WAIT_S)" >&2
+      cat "$errors" >&2
+      rm -f "$errors"
+      return 1
+    fi
+    if [[ -z $waiting ]]; then
+      echo "install_deps: another package manager run holds its lock" \
+        "($(grep -m1 "Could not get lock" "$errors" | sed 's/^E: //'));" \
+        "waiting for it, at most ${lock_wait_s} s (ROVERMAP_APT_LOCK_WAIT_S)" >&2
+      waiting=yes
+    fi
+    sleep "$lock_poll_s"
+    timeout=$((lock_deadline - SECONDS))
+    ((timeout > 0)) || timeout=0
+  done
+}
+
+apt_get update -qq
+apt_get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/support/ScratchDir.hpp"
 
@@ -26,6 +27,15 @@ inline std::string Slurp(const std::filesystem::path& p) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+/// The lines of a text file that are neither empty nor `#` comments (TUM files, drift.csv).
+inline std::vector<std::string> DataLines(const std::filesystem::path& p) {
+  std::vector<std::string> lines;
+  std::istringstream in(Slurp(p));
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '#') lines.push_back(line);
+  return lines;
 }
 
 class CommandFixture : public ::testing::Test {

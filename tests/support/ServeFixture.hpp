@@ -23,15 +23,6 @@
 
 namespace rovermap::testing {
 
-/// The lines of a text file that are neither empty nor `#` comments.
-inline std::vector<std::string> DataLines(const std::filesystem::path& p) {
-  std::vector<std::string> lines;
-  std::istringstream in(Slurp(p));
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') lines.push_back(line);
-  return lines;
-}
-
 class ServeFixture : public CommandFixture {
  protected:
   void TearDown() override {
