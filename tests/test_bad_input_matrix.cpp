@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -82,7 +83,7 @@ bool Has(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-// chmod 000 for the scope of a row. As root, access is not denied: the row is then skipped.
+// chmod 000 for the scope of a row.
 class Unreadable {
  public:
   explicit Unreadable(fs::path p) : p_(std::move(p)) { fs::permissions(p_, fs::perms::none); }
@@ -93,18 +94,40 @@ class Unreadable {
   Unreadable(const Unreadable&) = delete;
   Unreadable& operator=(const Unreadable&) = delete;
   bool Denies() const { return ::access(p_.c_str(), R_OK) != 0; }
+  const fs::path& path() const { return p_; }
 
  private:
   fs::path p_;
 };
 
-#define SKIP_IF_NOT_DENIED(locked)                                                           \
-  if (!(locked).Denies())                                                                    \
-  GTEST_SKIP() << "chmod 000 does not deny access here (running as root): needs a non-root " \
-                  "user"
+// As root, chmod 000 denies nothing: the row then runs rovermap as nobody (setpriv, from
+// util-linux, which every Debian has), with the scratch directory handed over to it.
+#define DENY_OR_SKIP(locked)                                                                     \
+  if (!DenyAccess(locked)) GTEST_SKIP() << "chmod 000 denies nothing here and nobody is not at " \
+                                           "hand"
 
 class BadInput : public rovermap::testing::ServeFixture {
  protected:
+  // True once `locked` cannot be read by the user the commands run as.
+  bool DenyAccess(const Unreadable& locked) {
+    if (locked.Denies()) return true;
+    const char* kSetpriv = "/usr/bin/setpriv";
+    if (::geteuid() != 0 || ::access(kSetpriv, X_OK) != 0) return false;
+    constexpr uid_t kNobody = 65534;
+    if (::lchown(dir_.c_str(), kNobody, kNobody) != 0) return false;
+    for (const auto& entry :
+         fs::recursive_directory_iterator(dir_, fs::directory_options::skip_permission_denied)) {
+      if (::lchown(entry.path().c_str(), kNobody, kNobody) != 0) return false;
+    }
+    run_as_ = {kSetpriv, "--reuid=65534", "--regid=65534", "--clear-groups"};
+    // The locked directory itself (mode 000, owned by nobody now) is not descended into above.
+    return ::lchown(locked.path().c_str(), kNobody, kNobody) == 0 &&
+           Rovermap("--help").status == 0 &&
+           std::system(("/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups test -r " +
+                        locked.path().string())
+                           .c_str()) != 0;
+  }
+
   // A copy of a bundled sequence (or file) that the row breaks.
   fs::path Copy(const fs::path& from, const std::string& name) {
     const fs::path to = dir_ / name;
@@ -284,7 +307,7 @@ TEST_F(BadInput, Register_UnreadableDirectory) {
   fs::create_directories(locked);
   fs::copy_file(kBunny045, locked / "bun045.ply");
   const Unreadable guard(locked);
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const CommandResult r =
       Rovermap("register " + (locked / "bun045.ply").string() + " " + kBunny000.string());
   EXPECT_EQ(r.status, 1);
@@ -363,7 +386,7 @@ TEST_F(BadInput, Simulate_UnreadableConfigDirectory) {
   fs::create_directories(locked);
   Put(locked / "sim.yaml", "sim:\n  frames: 2\n");
   const Unreadable guard(locked);
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const fs::path out = dir_ / "sim";
   const CommandResult r =
       Rovermap("simulate --out " + out.string() + " --config " + (locked / "sim.yaml").string());
@@ -533,7 +556,7 @@ TEST_F(BadInput, Replay_MismatchedGroundtruth) {
 TEST_F(BadInput, Replay_UnreadableSequenceDirectory) {
   const fs::path seq = Copy(kTinyCloud, "seq");
   const Unreadable guard(seq);
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const CommandResult r = Replay(seq);
   EXPECT_EQ(r.status, 1);
   // Not "missing": the file is there, in a directory we may not read.
@@ -544,7 +567,7 @@ TEST_F(BadInput, Replay_UnreadableSequenceDirectory) {
 TEST_F(BadInput, Replay_UnreadableFramesDirectory) {
   const fs::path seq = Copy(kTinyCloud, "seq");
   const Unreadable guard(seq / "frames");
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const CommandResult r = Replay(seq);
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(Has(r.err, "frames: cannot list (Permission denied)")) << r.err;
@@ -641,7 +664,7 @@ TEST_F(BadInput, Serve_OdometryWithTwoLines) {
 TEST_F(BadInput, Serve_UnreadableFramesDirectory) {
   const fs::path inbox = MakeInbox(kTinyCloud, 2, "inbox");
   const Unreadable guard(inbox / "frames");
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const fs::path out = dir_ / "out";
   const pid_t pid = Start(inbox, out, "log");
   // It used to wait for ever, the frames/ it could not list looking empty.
@@ -760,7 +783,7 @@ TEST_F(BadInput, Eval_UnreadableDirectory) {
   fs::create_directories(locked);
   fs::copy_file(kTinyCloud / "odometry.tum", locked / "estimate.tum");
   const Unreadable guard(locked);
-  SKIP_IF_NOT_DENIED(guard);
+  DENY_OR_SKIP(guard);
   const CommandResult r = Eval(locked / "estimate.tum");
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(Has(r.err, "estimate.tum: cannot open file (Permission denied)")) << r.err;

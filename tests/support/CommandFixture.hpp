@@ -43,10 +43,12 @@ class CommandFixture : public ::testing::Test {
   void SetUp() override { dir_ = ScratchDir(); }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
-  /// `rovermap ARGS` (ARGS as a shell would split them).
+  /// `rovermap ARGS` (ARGS as a shell would split them), under run_as_ if set.
   CommandResult Rovermap(const std::string& args) {
-    const std::string cmd = std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" +
-                            (dir_ / "stdout").string() + " 2>" + (dir_ / "stderr").string();
+    std::string cmd;
+    for (const std::string& word : run_as_) cmd += word + " ";
+    cmd += std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" + (dir_ / "stdout").string() +
+           " 2>" + (dir_ / "stderr").string();
     const int rc = std::system(cmd.c_str());
     CommandResult r;
     r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
@@ -63,6 +65,9 @@ class CommandFixture : public ::testing::Test {
   }
 
   std::filesystem::path dir_;
+  /// A command the commands run under (e.g. setpriv to drop root); its first word an
+  /// absolute path.
+  std::vector<std::string> run_as_;
 };
 
 }  // namespace rovermap::testing

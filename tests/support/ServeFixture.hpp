@@ -65,7 +65,8 @@ class ServeFixture : public CommandFixture {
     return inbox;
   }
 
-  // `rovermap serve` in the background, stderr appended to `log`; `fault` sets the kill hook.
+  // `rovermap serve` in the background (under run_as_), stderr appended to `log`; `fault` sets
+  // the kill hook.
   pid_t Start(const std::filesystem::path& inbox, const std::filesystem::path& out,
               const std::string& log, const std::vector<std::string>& extra = {},
               const std::string& fault = "") {
@@ -78,6 +79,7 @@ class ServeFixture : public CommandFixture {
                                      "--set",
                                      "serve.poll_interval_s=0.05"};
     args.insert(args.end(), extra.begin(), extra.end());
+    args.insert(args.begin(), run_as_.begin(), run_as_.end());
     const pid_t pid = ::fork();
     if (pid == 0) {
       std::vector<char*> argv;
