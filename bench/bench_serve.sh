@@ -98,9 +98,11 @@ printf '\n%-30s %10s %14s %14s %16s\n' "restart after" "frames" "restart [ms]" "
 for n in 100 "$LONG"; do
   make_inbox "$W/long" "$W/inbox" "$n"
   rm -rf "$W/serve"
-  ROVERMAP_FAULT_KILL="checkpoint:written:$((n / 10))" \
-    "$R" serve --inbox "$W/inbox" --out "$W/serve" 2>/dev/null || true
-  "$R" serve --inbox "$W/inbox" --out "$W/serve" 2>"$W/serve.log" &
+  # Snapshots exactly every 10 frames (checkpoint_share 0), so that the kill lands at frame n.
+  ROVERMAP_FAULT_KILL="checkpoint:written:$((n / 10))" "$R" serve --inbox "$W/inbox" \
+    --out "$W/serve" --set serve.checkpoint_share=0 2>/dev/null || true
+  "$R" serve --inbox "$W/inbox" --out "$W/serve" --set serve.checkpoint_share=0 \
+    2>"$W/serve.log" &
   pid=$!
   until grep -q "\"next_frame\": $n," "$W/serve/status.json" 2>/dev/null; do sleep 0.02; done
   kill -TERM $pid; wait $pid

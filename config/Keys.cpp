@@ -277,6 +277,10 @@ std::vector<KeyEntry> BuildRegistry() {
             "publish the outputs after this many frames (and on exit)");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),
             "snapshot the state after this many frames (each is journalled)");
+  serve.Double("checkpoint_share", &V::checkpoint_share, "fraction", Bounds{0, false, 1, false},
+               "largest share of the processing time snapshots may take (0: no limit)");
+  serve.Int("checkpoint_max_every", &V::checkpoint_max_every, "frames", AtLeast(1),
+            "a snapshot is never put off longer than this many frames");
   serve.Double("status_interval_s", &V::status_interval_s, "s", AtLeast(0),
                "rewrite status.json at most this often while frames are queued");
 

@@ -290,11 +290,14 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   Log(line.str());
   std::ostringstream writes;
   writes << std::fixed << std::setprecision(0);
-  if (++since_checkpoint_ >= setup_.serve.checkpoint_every) {
+  since_checkpoint_ms_ += result->time.load_ms + result->time.total_ms;
+  if (SnapshotDue(setup_.serve, ++since_checkpoint_, since_checkpoint_ms_, last_snapshot_ms_)) {
     const auto start = Clock::now();
     checkpoint_->Save(*mapper_, state_);
+    last_snapshot_ms_ = MsBetween(start, Clock::now());
     since_checkpoint_ = 0;
-    writes << ", checkpoint " << MsBetween(start, Clock::now()) << " ms ("
+    since_checkpoint_ms_ = 0.0;
+    writes << ", checkpoint " << last_snapshot_ms_ << " ms ("
            << checkpoint_->snapshot_bytes() / 1000000.0 << " MB)";
   }
   if (++since_publish_ >= setup_.serve.publish_every) {

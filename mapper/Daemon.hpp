@@ -96,6 +96,8 @@ class Daemon {
   std::optional<Clock::time_point> gap_since_;
   int since_publish_ = 0;
   int since_checkpoint_ = 0;
+  double since_checkpoint_ms_ = 0.0;  // the frames' processing time since the last snapshot
+  double last_snapshot_ms_ = 0.0;
   std::size_t processed_ = 0;  // frames this session
   double busy_ms_ = 0.0;       // time spent on them
   double restart_ms_ = 0.0;

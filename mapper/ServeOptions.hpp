@@ -18,9 +18,25 @@ struct ServeOptions {
   /// restart never registers a frame twice; a larger value writes less, and a restart re-fuses
   /// up to this many frames).
   int checkpoint_every = 10;
+  /// [fraction] the largest share of the frames' processing time snapshots may take: a snapshot
+  /// grows with the map, so one that is due waits until the frames since the last took
+  /// 1/checkpoint_share times as long as that one did; 0 = a snapshot every checkpoint_every.
+  double checkpoint_share = 0.1;
+  /// [frames] a snapshot is never put off longer than this many frames (a restart re-fuses at
+  /// most this many).
+  int checkpoint_max_every = 100;
   /// [s] while frames are queued, status.json is rewritten at most this often (0: after every
   /// frame); it is always rewritten when the queue runs dry, at a publication and on exit.
   double status_interval_s = 1.0;
 };
+
+/// Whether a snapshot is due after `frames` frames that took `frames_ms` [ms] since the last
+/// snapshot, which took `last_snapshot_ms` [ms] (0 before the first).
+inline bool SnapshotDue(const ServeOptions& o, int frames, double frames_ms,
+                        double last_snapshot_ms) {
+  if (frames < o.checkpoint_every) return false;
+  return o.checkpoint_share <= 0.0 || frames >= o.checkpoint_max_every ||
+         last_snapshot_ms <= o.checkpoint_share * frames_ms;
+}
 
 }  // namespace rovermap::mapper

@@ -170,12 +170,46 @@ TEST_F(Serve, StatusJsonRateLimitedWhileBusyCurrentWhenIdle) {
   Stop(pid);
 }
 
+// Snapshots put off for their share of the processing time (here a share no snapshot fits in),
+// up to checkpoint_max_every frames: after frame 0 (the first) and frame 3 only; after a
+// kill -9 the restart re-applies the one journalled frame since, and the outputs are replay's.
+TEST_F(Serve, SnapshotsWaitForTheirShareUpToTheLimit) {
+  const fs::path replay = Replay(kTinyCloud);
+  const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox");
+  const fs::path out = dir_ / "out";
+  const std::vector<std::string> sets = {
+      "--set", "serve.checkpoint_every=1",     "--set", "serve.checkpoint_share=0.000001",
+      "--set", "serve.checkpoint_max_every=3", "--set", "serve.publish_every=100"};
+  const pid_t pid = Start(inbox, out, "log", sets);
+  ASSERT_FALSE(WaitForNext(out, 5).is_null()) << Slurp(dir_ / "log");
+  ::kill(pid, SIGKILL);
+  EXPECT_EQ(WaitExit(pid), 128 + SIGKILL);
+  const std::string first = Slurp(dir_ / "log");
+  EXPECT_EQ(CountLines(first, "serve: after frame ", {", checkpoint"}), 2) << first;
+  EXPECT_NE(first.find("serve: after frame 0, checkpoint"), std::string::npos) << first;
+  EXPECT_NE(first.find("serve: after frame 3, checkpoint"), std::string::npos) << first;
+  const pid_t again = Start(inbox, out, "log", sets);
+  // status.json already says 5 (the first run's): wait for the restart's own line.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Slurp(dir_ / "log").find("resumed at frame") == std::string::npos &&
+         std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_NE(Slurp(dir_ / "log").find("resumed at frame 5 (1 journalled steps re-applied)"),
+            std::string::npos)
+      << Slurp(dir_ / "log");
+  Stop(again);
+  ExpectSameOutputs(replay, out);
+}
+
 // kill -9 at each kind of point, then a restart on the same OUT: the result is the
 // uninterrupted run's, and every frame is logged as done exactly once over the two runs.
 TEST_F(Serve, KillNineAtAnyPointThenRestartLosesNothing) {
   const fs::path replay = Replay(kTinyCloud);
-  const std::vector<std::string> every = {"--set", "serve.publish_every=2", "--set",
-                                          "serve.checkpoint_every=2"};
+  // Snapshots exactly every 2 frames (checkpoint_share 0), so that the kills land where named.
+  const std::vector<std::string> every = {"--set", "serve.publish_every=2",
+                                          "--set", "serve.checkpoint_every=2",
+                                          "--set", "serve.checkpoint_share=0"};
   int run = 0;
   for (const std::string fault :
        {"frame:processed:4", "journal:partial:3", "checkpoint:written:1", "checkpoint:renamed:2",
@@ -204,7 +238,8 @@ TEST_F(Serve, StereoRestartFromSnapshotReloadsTheReference) {
   const fs::path replay = Replay(kTinyStereo);
   const fs::path inbox = MakeInbox(kTinyStereo, 3, "inbox");
   const fs::path out = dir_ / "out";
-  const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1"};
+  const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1", "--set",
+                                          "serve.checkpoint_share=0"};
   EXPECT_EQ(WaitExit(Start(inbox, out, "log", every, "checkpoint:renamed:2")), 128 + SIGKILL);
   const pid_t pid = Start(inbox, out, "log", every);
   ASSERT_FALSE(WaitForNext(out, 3).is_null()) << Slurp(dir_ / "log");
@@ -315,14 +350,16 @@ TEST_F(Serve, SecondSignalExitsAtOnceAndTheRestartStillEqualsReplay) {
   const fs::path replay = Replay(kTinyStereo);
   const fs::path inbox = MakeInbox(kTinyStereo, 3, "inbox");
   const fs::path out = dir_ / "out";
-  const pid_t pid = Start(inbox, out, "log", {"--set", "serve.checkpoint_every=1"});
+  const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1", "--set",
+                                          "serve.checkpoint_share=0"};
+  const pid_t pid = Start(inbox, out, "log", every);
   ASSERT_FALSE(WaitForNext(out, 1).is_null()) << Slurp(dir_ / "log");
   ::kill(pid, SIGTERM);
   // Apart, or the kernel merges the two pending signals into one.
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   ::kill(pid, SIGTERM);
   EXPECT_EQ(WaitExit(pid), 1);
-  const pid_t again = Start(inbox, out, "log", {"--set", "serve.checkpoint_every=1"});
+  const pid_t again = Start(inbox, out, "log", every);
   ASSERT_FALSE(WaitForNext(out, 3).is_null()) << Slurp(dir_ / "log");
   Stop(again);
   ExpectSameOutputs(replay, out);

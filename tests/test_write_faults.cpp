@@ -461,7 +461,8 @@ TEST_F(ServeFault, JournalFullStopsTheDaemonAndTheRestartLosesNothing) {
 
 TEST_F(ServeFault, SnapshotFullStopsTheDaemonKeepingThePreviousState) {
   Drop(0, 3);
-  const std::vector<std::string> sets = {"serve.checkpoint_every=2", "serve.publish_every=100"};
+  const std::vector<std::string> sets = {"serve.checkpoint_every=2", "serve.checkpoint_share=0",
+                                         "serve.publish_every=100"};
   const ChildResult first = Serve(sets, RLIM_INFINITY, 3);
   ASSERT_EQ(first.status, 0) << first.message;
   const fs::path snapshot = out_ / "checkpoint" / "state.bin";
