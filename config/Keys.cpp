@@ -126,7 +126,9 @@ std::vector<KeyEntry> BuildRegistry() {
   using M = sim::SimOptions;
   SectionKeys<M> sim(keys, "sim", &Config::sim);
   sim.Int("seed", &M::seed, "count", AnyValue(), "same seed, same sequence");
-  sim.Int("frames", &M::frames, "count", AtLeast(1), "frames in the sequence");
+  // ~1 kB of path and poses per frame are held in memory.
+  sim.Int("frames", &M::frames, "count", Bounds{1, false, kMaxSimFrames, false},
+          "frames in the sequence");
   sim.Double("frame_rate_hz", &M::frame_rate_hz, "Hz", GreaterThan(0), "frame rate");
   sim.Double("speed_m_s", &M::speed_m_s, "m/s", AtLeast(0), "rover ground speed");
   sim.Double("origin_latitude_deg", &M::origin_latitude_deg, "deg", Bounds{-90, false, 90, false},
@@ -165,8 +167,10 @@ std::vector<KeyEntry> BuildRegistry() {
              "optical axis below the horizontal");
   sim.Double("baseline_m", &M::baseline_m, "m", GreaterThan(0), "stereo baseline");
   sim.Double("focal_px", &M::focal_px, "px", GreaterThan(0), "focal length");
-  sim.Int("image_width", &M::image_width, "px", AtLeast(16), "image width");
-  sim.Int("image_height", &M::image_height, "px", AtLeast(16), "image height");
+  sim.Int("image_width", &M::image_width, "px", Bounds{16, false, kMaxImageSide, false},
+          "image width");
+  sim.Int("image_height", &M::image_height, "px", Bounds{16, false, kMaxImageSide, false},
+          "image height");
   sim.Double("sun_elevation_deg", &M::sun_elevation_deg, "deg", Bounds{0, false, 90, false},
              "sun above the horizon");
   sim.Double("sun_azimuth_deg", &M::sun_azimuth_deg, "deg", AnyValue(),
@@ -341,8 +345,10 @@ int ParseInt(const YAML::Node& node, const Bounds& bounds) {
   const char* last = text.data() + text.size();
   long long value = 0;
   const auto [ptr, ec] = std::from_chars(SkipPlus(text), last, value);
-  if (ec == std::errc() && ptr == last &&
-      (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max())) {
+  const bool past_long_long = ec == std::errc::result_out_of_range && ptr == last;
+  if (past_long_long ||
+      (ec == std::errc() && ptr == last &&
+       (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()))) {
     throw ValueError("too large for an integer (got " + text + ")");
   }
   if (ec != std::errc() || ptr != last) throw ValueError("expected an integer (got " + text + ")");

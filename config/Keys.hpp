@@ -34,6 +34,13 @@ struct KeyEntry {
 /// Every key, grouped by section, in DumpYaml order.
 const std::vector<KeyEntry>& Registry();
 
+/// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
+/// could never be read back (sequence.yaml's camera obeys the same).
+constexpr int kMaxImageSide = 1 << 20;
+constexpr long long kMaxImagePixels = 1LL << 30;
+/// Most frames `simulate` makes (it holds about 1 kB per frame).
+constexpr int kMaxSimFrames = 100000;
+
 /// The valid range of a number; each end open or closed, infinite when absent.
 struct Bounds {
   double lo = -std::numeric_limits<double>::infinity();

@@ -6,13 +6,18 @@
 #include <cmath>
 #include <fstream>
 #include <set>
+#include <sstream>
 #include <system_error>
 #include <vector>
 
 #include "config/ConfigError.hpp"
+#include "config/Keys.hpp"
 
 namespace rovermap::config {
 namespace {
+
+using detail::kMaxImagePixels;
+using detail::kMaxImageSide;
 
 // Messages: "FILE:LINE: KEY: reason".
 class Reader {
@@ -103,16 +108,23 @@ class Reader {
 }  // namespace
 
 SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
-  const Reader r(path.string());
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     throw ConfigError(path.string() + ": missing (every sequence needs a sequence.yaml)");
   }
-  std::ifstream stream(path);
+  std::ifstream stream(path, std::ios::binary);
   if (!stream) throw ConfigError(path.string() + ": cannot read");
+  std::ostringstream text;
+  text << stream.rdbuf();
+  if (stream.bad()) throw ConfigError(path.string() + ": cannot read");
+  return ParseSequenceYaml(text.str(), path);
+}
+
+SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::path& path) {
+  const Reader r(path.string());
   YAML::Node root;
   try {
-    root = YAML::Load(stream);
+    root = YAML::Load(std::string(text));
   } catch (const YAML::Exception& e) {
     r.Fail(e.mark, "", "invalid YAML: " + e.msg);
   }
@@ -159,6 +171,25 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
     c.height = r.Integer(r.Required(camera, "camera", "height"), "camera.height");
     if (c.width <= 0) r.Fail(camera["width"].Mark(), "camera.width", "must be > 0");
     if (c.height <= 0) r.Fail(camera["height"].Mark(), "camera.height", "must be > 0");
+    // No image beyond OpenCV's decoding limits can ever match: refuse the size before any
+    // stage sizes buffers by it.
+    if (c.width > kMaxImageSide) {
+      r.Fail(camera["width"].Mark(), "camera.width",
+             "must be <= " + std::to_string(kMaxImageSide) + " px (got " + std::to_string(c.width) +
+                 ")");
+    }
+    if (c.height > kMaxImageSide) {
+      r.Fail(camera["height"].Mark(), "camera.height",
+             "must be <= " + std::to_string(kMaxImageSide) + " px (got " +
+                 std::to_string(c.height) + ")");
+    }
+    const long long pixels = static_cast<long long>(c.width) * c.height;
+    if (pixels > kMaxImagePixels) {
+      r.Fail(camera["width"].Mark(), "camera",
+             std::to_string(c.width) + " x " + std::to_string(c.height) + " = " +
+                 std::to_string(pixels) + " pixels, more than " + std::to_string(kMaxImagePixels) +
+                 " (the largest image OpenCV reads)");
+    }
     c.fx = positive("fx");
     c.fy = positive("fy");
     c.baseline_m = positive("baseline");

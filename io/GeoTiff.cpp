@@ -1,7 +1,5 @@
 #include "io/GeoTiff.hpp"
 
-#include "io/FileUtil.hpp"
-
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
@@ -17,6 +15,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 
 namespace rovermap::io {
@@ -49,6 +48,10 @@ class QuietGdal {
     return (msg != nullptr && *msg != '\0') ? std::string(" (") + msg + ")" : std::string();
   }
 };
+
+// Most memory ReadDemGeoTiff allocates for one raster's bands: a 5 cm DEM of about 470 m x 470 m
+// with its three bands.
+constexpr std::size_t kMaxReadBytes = std::size_t{1} << 30;
 
 [[noreturn]] void Fail(const std::filesystem::path& path, const std::string& what) {
   throw IoError(path.string() + ": " + what + QuietGdal::Last());
@@ -226,6 +229,16 @@ DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
   std::vector<float>* targets[3] = {&raster.elevation_m, &raster.stddev_m, &raster.count};
   const int bands = std::min(3, ds->GetRasterCount());
   if (bands < 1) Fail(path, "has no raster band");
+  // A few hundred bytes of header can claim any size (sparse or repeated tiles): check before
+  // allocating. Width and height are positive ints, so the product cannot overflow.
+  const std::size_t bytes = pixels * static_cast<std::size_t>(bands) * sizeof(float);
+  if (bytes > kMaxReadBytes) {
+    Fail(path, std::to_string(raster.width) + " x " + std::to_string(raster.height) +
+                   " pixels in " + std::to_string(bands) + " band(s) need " +
+                   std::to_string(bytes >> 20) + " MiB, more than the " +
+                   std::to_string(kMaxReadBytes >> 20) +
+                   " MiB a DEM may take here (crop it first)");
+  }
   if (const char* v = ds->GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE")) raster.layout = v;
   if (const char* v = ds->GetMetadataItem("COMPRESSION", "IMAGE_STRUCTURE")) {
     raster.compression = v;

@@ -1,0 +1,133 @@
+#pragma once
+// The parser entry points the fuzz targets drive, shared with test_fuzz_regressions.cpp so that
+// a saved input replays through exactly the code the fuzzer ran. Each returns kParsed or
+// kRejected (the parser's typed error); any other exception, crash or sanitizer report escapes.
+
+#include <cpl_vsi.h>
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/Config.hpp"
+#include "config/ConfigError.hpp"
+#include "config/SequenceYaml.hpp"
+#include "eval/TrajectoryIo.hpp"
+#include "io/GeoTiff.hpp"
+#include "io/Inbox.hpp"
+#include "io/IoError.hpp"
+#include "io/PointCloudIo.hpp"
+#include "io/Tum.hpp"
+
+namespace rovermap::fuzz {
+
+enum class Outcome { kParsed, kRejected };
+
+inline Outcome Ply(std::string_view bytes) {
+  try {
+    io::ParsePly(bytes, "fuzz.ply");
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
+  }
+}
+
+inline Outcome Xyz(std::string_view bytes) {
+  try {
+    io::ParseXyz(bytes, "fuzz.xyz");
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
+  }
+}
+
+inline Outcome Tum(std::string_view bytes) {
+  try {
+    io::ParseTum(bytes, "fuzz.tum");
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
+  }
+}
+
+// KITTI poses as `eval --format kitti` reads them; then the same bytes with the format detected
+// (8 or 12 columns), as `eval --format auto` does.
+inline Outcome Kitti(std::string_view bytes) {
+  Outcome outcome = Outcome::kParsed;
+  for (const eval::TrajectoryFormat format :
+       {eval::TrajectoryFormat::kKitti, eval::TrajectoryFormat::kAuto}) {
+    try {
+      eval::ParseTrajectory(bytes, "fuzz.txt", format);
+    } catch (const io::IoError&) {
+      outcome = Outcome::kRejected;
+    }
+  }
+  return outcome;
+}
+
+inline Outcome SequenceYaml(std::string_view bytes) {
+  try {
+    config::ParseSequenceYaml(bytes, "sequence.yaml");
+    return Outcome::kParsed;
+  } catch (const config::ConfigError&) {
+    return Outcome::kRejected;
+  }
+}
+
+inline Outcome ConfigFile(std::string_view bytes) {
+  try {
+    config::ParseConfig(bytes, "fuzz.yaml", {});
+    return Outcome::kParsed;
+  } catch (const config::ConfigError&) {
+    return Outcome::kRejected;
+  }
+}
+
+// `--set` values: one override per line, applied in order as the command line does.
+inline Outcome SetOverrides(std::string_view bytes) {
+  std::vector<std::string> overrides;
+  std::size_t start = 0;
+  while (start <= bytes.size()) {
+    std::size_t end = bytes.find('\n', start);
+    if (end == std::string_view::npos) end = bytes.size();
+    overrides.emplace_back(bytes.substr(start, end - start));
+    start = end + 1;
+  }
+  try {
+    config::LoadConfig(std::nullopt, overrides);
+    return Outcome::kParsed;
+  } catch (const config::ConfigError&) {
+    return Outcome::kRejected;
+  }
+}
+
+// The serve daemon's frames/NNNNNN.odom (and .gt): exactly one TUM line.
+inline Outcome Odom(std::string_view bytes) {
+  try {
+    io::ParseFramePose(bytes, "000000.odom");
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
+  }
+}
+
+// `eval --dem`: the GeoTIFF reader on a GDAL in-memory file (no disk traffic per input).
+inline Outcome GeoTiff(std::string_view bytes) {
+  static const std::string kName = "/vsimem/rovermap_fuzz.tif";
+  std::vector<GByte> copy(bytes.begin(), bytes.end());  // GDAL wants a mutable buffer
+  VSILFILE* file = VSIFileFromMemBuffer(kName.c_str(), copy.data(), copy.size(), FALSE);
+  if (file == nullptr) return Outcome::kRejected;
+  VSIFCloseL(file);
+  struct Unlink {
+    ~Unlink() { VSIUnlink(kName.c_str()); }
+  } unlink;
+  try {
+    io::ReadDemGeoTiff(kName);
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
+  }
+}
+
+}  // namespace rovermap::fuzz
