@@ -288,7 +288,11 @@ std::vector<KeyEntry> BuildRegistry() {
 // Shortest round-trip text; no forced ".0", for messages.
 std::string FormatNumber(double value) {
   char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  // Whole numbers in full ("100000", not the shorter "1e+05"): bounds and counts read better.
+  const bool whole = value == std::floor(value) && std::abs(value) < 1e15;
+  const auto result =
+      whole ? std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed)
+            : std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
 }
 

@@ -51,19 +51,15 @@ inline Outcome Tum(std::string_view bytes) {
   }
 }
 
-// KITTI poses as `eval --format kitti` reads them; then the same bytes with the format detected
-// (8 or 12 columns), as `eval --format auto` does.
+// `eval`'s trajectory reader with the format detected from the first line (12 numbers: KITTI,
+// 8: TUM), as `--format auto` reads it.
 inline Outcome Kitti(std::string_view bytes) {
-  Outcome outcome = Outcome::kParsed;
-  for (const eval::TrajectoryFormat format :
-       {eval::TrajectoryFormat::kKitti, eval::TrajectoryFormat::kAuto}) {
-    try {
-      eval::ParseTrajectory(bytes, "fuzz.txt", format);
-    } catch (const io::IoError&) {
-      outcome = Outcome::kRejected;
-    }
+  try {
+    eval::ParseTrajectory(bytes, "fuzz.txt", eval::TrajectoryFormat::kAuto);
+    return Outcome::kParsed;
+  } catch (const io::IoError&) {
+    return Outcome::kRejected;
   }
-  return outcome;
 }
 
 inline Outcome SequenceYaml(std::string_view bytes) {
@@ -84,11 +80,12 @@ inline Outcome ConfigFile(std::string_view bytes) {
   }
 }
 
-// `--set` values: one override per line, applied in order as the command line does.
+// `--set` values: one override per line (the last newline ends a line), applied in order as
+// the command line does.
 inline Outcome SetOverrides(std::string_view bytes) {
   std::vector<std::string> overrides;
   std::size_t start = 0;
-  while (start <= bytes.size()) {
+  while (start < bytes.size()) {
     std::size_t end = bytes.find('\n', start);
     if (end == std::string_view::npos) end = bytes.size();
     overrides.emplace_back(bytes.substr(start, end - start));

@@ -1,4 +1,4 @@
-// libFuzzer target: eval::ParseTrajectory (KITTI poses, and auto-detected TUM/KITTI).
+// libFuzzer target: eval::ParseTrajectory, format detected (KITTI poses, or TUM).
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
