@@ -3,7 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -138,12 +137,9 @@ std::string ReadConfigFile(const std::filesystem::path& file) {
   if (std::filesystem::is_directory(file, error)) {
     throw ConfigError(file.string() + ": is a directory, not a config file");
   }
-  std::ifstream stream(file, std::ios::binary);
-  if (!stream) throw ConfigError(file.string() + ": cannot read config file");
-  std::ostringstream text;
-  text << stream.rdbuf();
-  if (stream.bad()) throw ConfigError(file.string() + ": cannot read config file");
-  return text.str();
+  std::optional<std::string> text = detail::ReadText(file);
+  if (!text) throw ConfigError(file.string() + ": cannot read config file");
+  return std::move(*text);
 }
 
 void ApplyYaml(Config& config, std::string_view yaml, const std::filesystem::path& file) {

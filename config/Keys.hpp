@@ -5,8 +5,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -33,6 +35,9 @@ struct KeyEntry {
 
 /// Every key, grouped by section, in DumpYaml order.
 const std::vector<KeyEntry>& Registry();
+
+/// The bytes of `path`; nullopt if it cannot be opened or read (the caller names the file).
+std::optional<std::string> ReadText(const std::filesystem::path& path);
 
 /// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
 /// could never be read back (sequence.yaml's camera obeys the same).

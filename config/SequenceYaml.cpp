@@ -4,9 +4,9 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <optional>
 #include <set>
-#include <sstream>
+#include <string>
 #include <system_error>
 #include <vector>
 
@@ -112,12 +112,9 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path, error)) {
     throw ConfigError(path.string() + ": missing (every sequence needs a sequence.yaml)");
   }
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw ConfigError(path.string() + ": cannot read");
-  std::ostringstream text;
-  text << stream.rdbuf();
-  if (stream.bad()) throw ConfigError(path.string() + ": cannot read");
-  return ParseSequenceYaml(text.str(), path);
+  const std::optional<std::string> text = detail::ReadText(path);
+  if (!text) throw ConfigError(path.string() + ": cannot read");
+  return ParseSequenceYaml(*text, path);
 }
 
 SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::path& path) {

@@ -8,9 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <iterator>
-#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,6 +20,7 @@
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "tests/fuzz/FuzzEntries.hpp"
+#include "tests/support/ErrorText.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::fuzz {
@@ -87,22 +86,8 @@ INSTANTIATE_TEST_SUITE_P(Targets, FuzzInputs, ::testing::ValuesIn(kTargets),
 
 // ---- bounds on what an input can make the program allocate --------------------------------
 
-template <typename Error>
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected a typed error";
-  return "";
-}
-
-::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure()
-         << "\"" << text << "\"\n does not contain \"" << part << "\"";
-}
+using rovermap::testing::Contains;
+using rovermap::testing::ErrorOf;
 
 constexpr const char* kTrillion = "1000000000000";
 

@@ -6,6 +6,7 @@
 #include <cpl_vsi.h>
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -24,60 +25,42 @@ namespace rovermap::fuzz {
 
 enum class Outcome { kParsed, kRejected };
 
-inline Outcome Ply(std::string_view bytes) {
+// Runs `parse`; only the parser's documented error type counts as a rejection.
+template <typename Error, typename Parse>
+Outcome Run(const Parse& parse) {
   try {
-    io::ParsePly(bytes, "fuzz.ply");
+    parse();
     return Outcome::kParsed;
-  } catch (const io::IoError&) {
+  } catch (const Error&) {
     return Outcome::kRejected;
   }
+}
+
+inline Outcome Ply(std::string_view bytes) {
+  return Run<io::IoError>([&] { io::ParsePly(bytes, "fuzz.ply"); });
 }
 
 inline Outcome Xyz(std::string_view bytes) {
-  try {
-    io::ParseXyz(bytes, "fuzz.xyz");
-    return Outcome::kParsed;
-  } catch (const io::IoError&) {
-    return Outcome::kRejected;
-  }
+  return Run<io::IoError>([&] { io::ParseXyz(bytes, "fuzz.xyz"); });
 }
 
 inline Outcome Tum(std::string_view bytes) {
-  try {
-    io::ParseTum(bytes, "fuzz.tum");
-    return Outcome::kParsed;
-  } catch (const io::IoError&) {
-    return Outcome::kRejected;
-  }
+  return Run<io::IoError>([&] { io::ParseTum(bytes, "fuzz.tum"); });
 }
 
 // `eval`'s trajectory reader with the format detected from the first line (12 numbers: KITTI,
 // 8: TUM), as `--format auto` reads it.
 inline Outcome Kitti(std::string_view bytes) {
-  try {
-    eval::ParseTrajectory(bytes, "fuzz.txt", eval::TrajectoryFormat::kAuto);
-    return Outcome::kParsed;
-  } catch (const io::IoError&) {
-    return Outcome::kRejected;
-  }
+  return Run<io::IoError>(
+      [&] { eval::ParseTrajectory(bytes, "fuzz.txt", eval::TrajectoryFormat::kAuto); });
 }
 
 inline Outcome SequenceYaml(std::string_view bytes) {
-  try {
-    config::ParseSequenceYaml(bytes, "sequence.yaml");
-    return Outcome::kParsed;
-  } catch (const config::ConfigError&) {
-    return Outcome::kRejected;
-  }
+  return Run<config::ConfigError>([&] { config::ParseSequenceYaml(bytes, "sequence.yaml"); });
 }
 
 inline Outcome ConfigFile(std::string_view bytes) {
-  try {
-    config::ParseConfig(bytes, "fuzz.yaml", {});
-    return Outcome::kParsed;
-  } catch (const config::ConfigError&) {
-    return Outcome::kRejected;
-  }
+  return Run<config::ConfigError>([&] { config::ParseConfig(bytes, "fuzz.yaml", {}); });
 }
 
 // `--set` values: one override per line (the last newline ends a line), applied in order as
@@ -91,22 +74,12 @@ inline Outcome SetOverrides(std::string_view bytes) {
     overrides.emplace_back(bytes.substr(start, end - start));
     start = end + 1;
   }
-  try {
-    config::LoadConfig(std::nullopt, overrides);
-    return Outcome::kParsed;
-  } catch (const config::ConfigError&) {
-    return Outcome::kRejected;
-  }
+  return Run<config::ConfigError>([&] { config::LoadConfig(std::nullopt, overrides); });
 }
 
 // The serve daemon's frames/NNNNNN.odom (and .gt): exactly one TUM line.
 inline Outcome Odom(std::string_view bytes) {
-  try {
-    io::ParseFramePose(bytes, "000000.odom");
-    return Outcome::kParsed;
-  } catch (const io::IoError&) {
-    return Outcome::kRejected;
-  }
+  return Run<io::IoError>([&] { io::ParseFramePose(bytes, "000000.odom"); });
 }
 
 // `eval --dem`: the GeoTIFF reader on a GDAL in-memory file (no disk traffic per input).
@@ -119,12 +92,7 @@ inline Outcome GeoTiff(std::string_view bytes) {
   struct Unlink {
     ~Unlink() { VSIUnlink(kName.c_str()); }
   } unlink;
-  try {
-    io::ReadDemGeoTiff(kName);
-    return Outcome::kParsed;
-  } catch (const io::IoError&) {
-    return Outcome::kRejected;
-  }
+  return Run<io::IoError>([&] { io::ReadDemGeoTiff(kName); });
 }
 
 }  // namespace rovermap::fuzz
