@@ -1,10 +1,12 @@
 # Thin wrapper over CMake: `make demo` and `make test` do the whole set-up.
 BUILD      ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+FUZZ_TIME  ?= 300
 JOBS       ?= $(shell nproc)
 DEMO_OUT   ?= out/demo
 
-.PHONY: deps build demo test test-asan bench clean
+.PHONY: deps build demo test test-asan fuzz-build fuzz fuzz-smoke bench clean
 
 deps:
 	@bash scripts/install_deps.sh
@@ -27,8 +29,22 @@ test-asan: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
+# libFuzzer targets (tests/fuzz) with ASan + UBSan, built with clang in their own folder.
+fuzz-build: deps
+	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DROVERMAP_FUZZ=ON -DROVERMAP_BUILD_TESTS=OFF -DROVERMAP_BUILD_BENCH=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_targets
+
+# Each target FUZZ_TIME seconds, one after the other (FUZZ_TARGETS="ply tum" for a few).
+fuzz: fuzz-build
+	@bash scripts/fuzz.sh $(FUZZ_BUILD) $(FUZZ_TIME) $(FUZZ_TARGETS)
+
+# CI: every target briefly on its seed corpus, so that a parser regression shows up.
+fuzz-smoke: fuzz-build
+	@bash scripts/fuzz.sh $(FUZZ_BUILD) 20
+
 bench: build
 	@bash bench/run_bench.sh $(BUILD)
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -132,26 +131,29 @@ void Apply(Config& config, Source& source, const std::string& key, const YAML::N
   }
 }
 
-void ApplyFile(Config& config, const std::filesystem::path& file) {
-  Source source{file.string(), {}};
+std::string ReadConfigFile(const std::filesystem::path& file) {
   std::error_code error;
   const auto status = std::filesystem::status(file, error);
   // Only "not found" means missing: a directory we may not enter (EACCES) hides the file.
   if (error && error != std::errc::no_such_file_or_directory) {
-    throw ConfigError(source.file + ": cannot access config file (" + error.message() + ")");
+    throw ConfigError(file.string() + ": cannot access config file (" + error.message() + ")");
   }
-  if (!std::filesystem::exists(status)) throw ConfigError(source.file + ": no such config file");
+  if (!std::filesystem::exists(status)) throw ConfigError(file.string() + ": no such config file");
   if (std::filesystem::is_directory(status)) {
-    throw ConfigError(source.file + ": is a directory, not a config file");
+    throw ConfigError(file.string() + ": is a directory, not a config file");
   }
-  std::ifstream stream(file);
-  if (!stream) {
-    throw ConfigError(source.file + ": cannot read config file (" + std::strerror(errno) + ")");
+  std::optional<std::string> text = detail::ReadText(file);
+  if (!text) {
+    throw ConfigError(file.string() + ": cannot read config file (" + std::strerror(errno) + ")");
   }
+  return std::move(*text);
+}
 
+void ApplyYaml(Config& config, std::string_view yaml, const std::filesystem::path& file) {
+  Source source{file.string(), {}};
   YAML::Node root;
   try {
-    root = YAML::Load(stream);
+    root = YAML::Load(std::string(yaml));
   } catch (const YAML::Exception& e) {
     const std::string where = e.mark.is_null()
                                   ? source.file
@@ -228,6 +230,13 @@ static void ValidateCombinations(const Config& config) {
   if (st.max_range_m <= st.min_range_m) {
     throw ConfigError("stereo.max_range_m: must be > stereo.min_range_m");
   }
+  const long long sim_pixels =
+      static_cast<long long>(config.sim.image_width) * config.sim.image_height;
+  if (sim_pixels > detail::kMaxImagePixels) {
+    throw ConfigError(
+        "sim.image_height: sim.image_width x sim.image_height = " + std::to_string(sim_pixels) +
+        " pixels, more than " + std::to_string(detail::kMaxImagePixels));
+  }
   if (config.sim.terrain_size_m / config.sim.terrain_cell_m >= 20000) {
     throw ConfigError(
         "sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
@@ -237,8 +246,14 @@ static void ValidateCombinations(const Config& config) {
 
 Config LoadConfig(const std::optional<std::filesystem::path>& file,
                   const std::vector<std::string>& overrides) {
+  if (file) return ParseConfig(ReadConfigFile(*file), *file, overrides);
+  return ParseConfig("", {}, overrides);  // empty YAML: the defaults
+}
+
+Config ParseConfig(std::string_view yaml, const std::filesystem::path& path,
+                   const std::vector<std::string>& overrides) {
   Config config;
-  if (file) ApplyFile(config, *file);
+  ApplyYaml(config, yaml, path);
   for (const std::string& override_text : overrides) ApplyOverride(config, override_text);
   ValidateCombinations(config);
   return config;

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "config/ConfigError.hpp"
@@ -38,6 +39,11 @@ struct Config {
 ///        '='.
 Config LoadConfig(const std::optional<std::filesystem::path>& file,
                   const std::vector<std::string>& overrides);
+
+/// LoadConfig with the file's text already read; `path` only names it in messages.
+/// @throw ConfigError as LoadConfig.
+Config ParseConfig(std::string_view yaml, const std::filesystem::path& path,
+                   const std::vector<std::string>& overrides);
 
 /// Every key with its current value and a `# [unit] doc` comment, grouped by section: the
 /// layout of config/default.yaml, and loadable by LoadConfig to give `config` back.

@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <system_error>
 
 namespace rovermap::config::detail {
@@ -126,7 +128,9 @@ std::vector<KeyEntry> BuildRegistry() {
   using M = sim::SimOptions;
   SectionKeys<M> sim(keys, "sim", &Config::sim);
   sim.Int("seed", &M::seed, "count", AnyValue(), "same seed, same sequence");
-  sim.Int("frames", &M::frames, "count", AtLeast(1), "frames in the sequence");
+  // ~1 kB of path and poses per frame are held in memory.
+  sim.Int("frames", &M::frames, "count", Bounds{1, false, kMaxSimFrames, false},
+          "frames in the sequence");
   sim.Double("frame_rate_hz", &M::frame_rate_hz, "Hz", GreaterThan(0), "frame rate");
   sim.Double("speed_m_s", &M::speed_m_s, "m/s", AtLeast(0), "rover ground speed");
   sim.Double("origin_latitude_deg", &M::origin_latitude_deg, "deg", Bounds{-90, false, 90, false},
@@ -165,8 +169,10 @@ std::vector<KeyEntry> BuildRegistry() {
              "optical axis below the horizontal");
   sim.Double("baseline_m", &M::baseline_m, "m", GreaterThan(0), "stereo baseline");
   sim.Double("focal_px", &M::focal_px, "px", GreaterThan(0), "focal length");
-  sim.Int("image_width", &M::image_width, "px", AtLeast(16), "image width");
-  sim.Int("image_height", &M::image_height, "px", AtLeast(16), "image height");
+  sim.Int("image_width", &M::image_width, "px", Bounds{16, false, kMaxImageSide, false},
+          "image width");
+  sim.Int("image_height", &M::image_height, "px", Bounds{16, false, kMaxImageSide, false},
+          "image height");
   sim.Double("sun_elevation_deg", &M::sun_elevation_deg, "deg", Bounds{0, false, 90, false},
              "sun above the horizon");
   sim.Double("sun_azimuth_deg", &M::sun_azimuth_deg, "deg", AnyValue(),
@@ -290,7 +296,11 @@ std::vector<KeyEntry> BuildRegistry() {
 // Shortest round-trip text; no forced ".0", for messages.
 std::string FormatNumber(double value) {
   char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  // Whole numbers in full ("100000", not the shorter "1e+05"): bounds and counts read better.
+  const bool whole = value == std::floor(value) && std::abs(value) < 1e15;
+  const auto result =
+      whole ? std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed)
+            : std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
 }
 
@@ -309,6 +319,15 @@ const char* SkipPlus(const std::string& text) {
 }
 
 }  // namespace
+
+std::optional<std::string> ReadText(const std::filesystem::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) return std::nullopt;
+  std::ostringstream text;
+  text << stream.rdbuf();
+  if (stream.bad()) return std::nullopt;
+  return text.str();
+}
 
 const std::vector<KeyEntry>& Registry() {
   static const std::vector<KeyEntry> keys = BuildRegistry();
@@ -347,8 +366,10 @@ int ParseInt(const YAML::Node& node, const Bounds& bounds) {
   const char* last = text.data() + text.size();
   long long value = 0;
   const auto [ptr, ec] = std::from_chars(SkipPlus(text), last, value);
-  if (ec == std::errc() && ptr == last &&
-      (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max())) {
+  const bool past_long_long = ec == std::errc::result_out_of_range && ptr == last;
+  if (past_long_long ||
+      (ec == std::errc() && ptr == last &&
+       (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()))) {
     throw ValueError("too large for an integer (got " + text + ")");
   }
   if (ec != std::errc() || ptr != last) throw ValueError("expected an integer (got " + text + ")");

@@ -5,8 +5,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -33,6 +35,16 @@ struct KeyEntry {
 
 /// Every key, grouped by section, in DumpYaml order.
 const std::vector<KeyEntry>& Registry();
+
+/// The bytes of `path`; nullopt if it cannot be opened or read (the caller names the file).
+std::optional<std::string> ReadText(const std::filesystem::path& path);
+
+/// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
+/// could never be read back (sequence.yaml's camera obeys the same).
+constexpr int kMaxImageSide = 1 << 20;
+constexpr long long kMaxImagePixels = 1LL << 30;
+/// Most frames `simulate` makes (it holds about 1 kB per frame).
+constexpr int kMaxSimFrames = 100000;
 
 /// The valid range of a number; each end open or closed, infinite when absent.
 struct Bounds {

@@ -4,15 +4,20 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <optional>
 #include <set>
+#include <string>
 #include <system_error>
 #include <vector>
 
 #include "config/ConfigError.hpp"
+#include "config/Keys.hpp"
 
 namespace rovermap::config {
 namespace {
+
+using detail::kMaxImagePixels;
+using detail::kMaxImageSide;
 
 // Messages: "FILE:LINE: KEY: reason".
 class Reader {
@@ -103,7 +108,6 @@ class Reader {
 }  // namespace
 
 SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
-  const Reader r(path.string());
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) {
     // EACCES on the directory is not "missing": say what the system said.
@@ -112,11 +116,16 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
     }
     throw ConfigError(path.string() + ": missing (every sequence needs a sequence.yaml)");
   }
-  std::ifstream stream(path);
-  if (!stream) throw ConfigError(path.string() + ": cannot read");
+  const std::optional<std::string> text = detail::ReadText(path);
+  if (!text) throw ConfigError(path.string() + ": cannot read");
+  return ParseSequenceYaml(*text, path);
+}
+
+SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::path& path) {
+  const Reader r(path.string());
   YAML::Node root;
   try {
-    root = YAML::Load(stream);
+    root = YAML::Load(std::string(text));
   } catch (const YAML::Exception& e) {
     r.Fail(e.mark, "", "invalid YAML: " + e.msg);
   }
@@ -163,6 +172,25 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
     c.height = r.Integer(r.Required(camera, "camera", "height"), "camera.height");
     if (c.width <= 0) r.Fail(camera["width"].Mark(), "camera.width", "must be > 0");
     if (c.height <= 0) r.Fail(camera["height"].Mark(), "camera.height", "must be > 0");
+    // No image beyond OpenCV's decoding limits can ever match: refuse the size before any
+    // stage sizes buffers by it.
+    if (c.width > kMaxImageSide) {
+      r.Fail(camera["width"].Mark(), "camera.width",
+             "must be <= " + std::to_string(kMaxImageSide) + " px (got " + std::to_string(c.width) +
+                 ")");
+    }
+    if (c.height > kMaxImageSide) {
+      r.Fail(camera["height"].Mark(), "camera.height",
+             "must be <= " + std::to_string(kMaxImageSide) + " px (got " +
+                 std::to_string(c.height) + ")");
+    }
+    const long long pixels = static_cast<long long>(c.width) * c.height;
+    if (pixels > kMaxImagePixels) {
+      r.Fail(camera["width"].Mark(), "camera",
+             std::to_string(c.width) + " x " + std::to_string(c.height) + " = " +
+                 std::to_string(pixels) + " pixels, more than " + std::to_string(kMaxImagePixels) +
+                 " (the largest image OpenCV reads)");
+    }
     c.fx = positive("fx");
     c.fy = positive("fy");
     c.baseline_m = positive("baseline");

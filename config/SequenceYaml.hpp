@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "io/CameraModel.hpp"  // header-only: config does not link io
 
@@ -34,5 +35,9 @@ struct SequenceYaml {
 ///        quaternion that is not unit length within 1e-3; both or neither of rotation_rpy_deg
 ///        and quaternion), or a stereo sequence has no camera.
 SequenceYaml ReadSequenceYaml(const std::filesystem::path& path);
+
+/// ReadSequenceYaml on text already read; `path` only names the file in messages.
+/// @throw ConfigError as ReadSequenceYaml.
+SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::path& path);
 
 }  // namespace rovermap::config

@@ -103,7 +103,12 @@ TrajectoryFormat ParseTrajectoryFormat(const std::string& text) {
 }
 
 Trajectory ReadTrajectory(const std::filesystem::path& path, TrajectoryFormat format) {
-  const std::string contents = io::ReadWholeFile(path);
+  return ParseTrajectory(io::ReadWholeFile(path), path, format);
+}
+
+Trajectory ParseTrajectory(std::string_view text, const std::filesystem::path& path,
+                           TrajectoryFormat format) {
+  const std::string contents(text);
   Trajectory trajectory;
   trajectory.file = path.string();
   trajectory.format = format == TrajectoryFormat::kAuto ? DetectFormat(contents, path) : format;

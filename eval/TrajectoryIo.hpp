@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace rovermap::eval {
@@ -37,5 +38,9 @@ struct Trajectory {
 ///        (‖RᵀR − I‖∞, det R > 0), or TUM timestamps are not strictly increasing.
 Trajectory ReadTrajectory(const std::filesystem::path& path,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
+
+/// ReadTrajectory on text already read; `path` only names the file in messages. Same errors.
+Trajectory ParseTrajectory(std::string_view contents, const std::filesystem::path& path,
+                           TrajectoryFormat format = TrajectoryFormat::kAuto);
 
 }  // namespace rovermap::eval

@@ -48,6 +48,10 @@ class QuietGdal {
   }
 };
 
+// Most memory ReadDemGeoTiff may need for one raster: a 5 cm DEM of about 470 m x 470 m with its
+// three bands.
+constexpr std::size_t kMaxReadBytes = std::size_t{1} << 30;
+
 [[noreturn]] void Fail(const std::filesystem::path& path, const std::string& what) {
   throw IoError(path.string() + ": " + what + QuietGdal::Last());
 }
@@ -231,6 +235,25 @@ DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
   std::vector<float>* targets[3] = {&raster.elevation_m, &raster.stddev_m, &raster.count};
   const int bands = std::min(3, ds->GetRasterCount());
   if (bands < 1) Fail(path, "has no raster band");
+  // A few hundred bytes of header can claim any size (sparse or repeated tiles, thousands of
+  // bands): check before reading. The cost is our Float32 copies plus one block as GDAL decodes
+  // it, every band at once for pixel-interleaved data (GDAL's block cache comes on top).
+  double stored_pixel_bytes = 0.0;
+  for (int b = 1; b <= ds->GetRasterCount(); ++b) {
+    stored_pixel_bytes += GDALGetDataTypeSizeBytes(ds->GetRasterBand(b)->GetRasterDataType());
+  }
+  int block_x = 0;
+  int block_y = 0;
+  ds->GetRasterBand(1)->GetBlockSize(&block_x, &block_y);
+  const double bytes = static_cast<double>(pixels) * bands * sizeof(float) +
+                       static_cast<double>(block_x) * block_y * stored_pixel_bytes;
+  if (bytes > static_cast<double>(kMaxReadBytes)) {
+    Fail(path, std::to_string(raster.width) + " x " + std::to_string(raster.height) + " pixels, " +
+                   std::to_string(ds->GetRasterCount()) + " band(s): reading needs " +
+                   std::to_string(std::llround(bytes / (1 << 20))) + " MiB, more than the " +
+                   std::to_string(kMaxReadBytes >> 20) +
+                   " MiB a DEM may take here (crop it first)");
+  }
   if (const char* v = ds->GetMetadataItem("LAYOUT", "IMAGE_STRUCTURE")) raster.layout = v;
   if (const char* v = ds->GetMetadataItem("COMPRESSION", "IMAGE_STRUCTURE")) {
     raster.compression = v;

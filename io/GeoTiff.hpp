@@ -68,8 +68,9 @@ struct DemRaster {
 
 /// Reads a GeoTIFF written by WriteDemGeoTiff (or any north-up 1..3-band raster GDAL reads:
 /// band 1 elevation) as Float32; values equal to a band's nodata become NaN.
-/// @throw IoError naming `path` if it cannot be opened or read, has no geotransform, or its grid
-///        is rotated or degenerate.
+/// @throw IoError naming `path` if it cannot be opened or read, has no geotransform, its grid
+///        is rotated or degenerate, or reading it would take more than 1 GiB (the bands as
+///        Float32 and one block of the file as GDAL decodes it).
 DemRaster ReadDemGeoTiff(const std::filesystem::path& path);
 
 }  // namespace rovermap::io

@@ -13,17 +13,18 @@ namespace {
 
 constexpr const char* kKinds[] = {"left.png", "right.png", "ply", "odom", "gt"};
 
-// The one pose of a .odom / .gt file.
-StampedPose ReadOnePose(const fs::path& path) {
-  const std::vector<StampedPose> poses = ParseTum(ReadWholeFile(path), path);
+StampedPose ReadOnePose(const fs::path& path) { return ParseFramePose(ReadWholeFile(path), path); }
+
+}  // namespace
+
+StampedPose ParseFramePose(std::string_view text, const fs::path& path) {
+  const std::vector<StampedPose> poses = ParseTum(text, path);
   if (poses.size() != 1) {
     throw IoError(path.string() + ": holds " + std::to_string(poses.size()) +
                   " poses, a frame's file holds exactly one TUM line");
   }
   return poses.front();
 }
-
-}  // namespace
 
 Inbox::Inbox(fs::path directory) : directory_(std::move(directory)) {}
 

@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/Sequence.hpp"
@@ -29,6 +30,10 @@ struct InboxFrameFiles {
     return odom && (sensor == SensorType::kStereo ? left && right : ply);
   }
 };
+
+/// The one pose of a frame's .odom or .gt file (its text); `path` only names it in messages.
+/// @throw IoError "PATH:LINE: reason" as ParseTum, or "PATH: holds N poses" unless exactly one.
+StampedPose ParseFramePose(std::string_view text, const std::filesystem::path& path);
 
 class Inbox {
  public:

@@ -484,7 +484,10 @@ PointCloud ReadBinaryBody(const std::filesystem::path& path, std::string_view da
 }  // namespace
 
 registration::PointCloud ReadPly(const std::filesystem::path& path) {
-  const std::string data = ReadWholeFile(path);
+  return ParsePly(ReadWholeFile(path), path);
+}
+
+registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path) {
   if (data.empty()) Fail(path, 0, "empty file");
   const PlyHeader header = ParseHeader(path, data);
 

@@ -25,7 +25,9 @@ using registration::PointCloud;
 constexpr std::size_t kXyzColumns = 3;
 constexpr std::size_t kXyzColumnsWithNormals = 6;
 
-PointCloud ParseXyz(const std::filesystem::path& path, std::string_view data) {
+}  // namespace
+
+PointCloud ParseXyz(std::string_view data, const std::filesystem::path& path) {
   if (data.empty()) Fail(path, 0, "empty file");
 
   PointCloud cloud;
@@ -90,6 +92,8 @@ PointCloud ParseXyz(const std::filesystem::path& path, std::string_view data) {
   return cloud;
 }
 
+namespace {
+
 void CheckAttributeSizes(const PointCloud& cloud) {
   const std::size_t n = cloud.points.size();
   const auto check = [n](std::size_t size, const char* name) {
@@ -130,7 +134,7 @@ void AppendFloat64Le(std::string* out, double value) {
 }  // namespace
 
 registration::PointCloud ReadXyz(const std::filesystem::path& path) {
-  return ParseXyz(path, ReadWholeFile(path));
+  return ParseXyz(ReadWholeFile(path), path);
 }
 
 registration::PointCloud ReadPointCloud(const std::filesystem::path& path) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string_view>
 
 #include "registration/PointCloud.hpp"
 
@@ -18,10 +19,17 @@ registration::PointCloud ReadPointCloud(const std::filesystem::path& path);
 /// lines between two points. Comment-only lines are transparent: they do not separate chains.
 registration::PointCloud ReadXyz(const std::filesystem::path& path);
 
+/// ReadXyz on bytes already read; `path` only names the file in messages. Same errors.
+registration::PointCloud ParseXyz(std::string_view data, const std::filesystem::path& path);
+
 /// PLY (ascii, binary_little_endian or binary_big_endian 1.0; LF or CRLF). Reads x, y, z of the
 /// `vertex` element (any scalar type), plus nx, ny, nz when all three are present; every other
 /// property and element is skipped. chain_ids is left empty.
 registration::PointCloud ReadPly(const std::filesystem::path& path);
+
+/// ReadPly on bytes already read; `path` only names the file in messages. Same errors; never
+/// allocates more than the data can hold, whatever counts the header claims.
+registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path);
 
 /// Writes a PLY with `double` x y z (and nx ny nz when the cloud has normals), binary little
 /// endian or ascii. Atomic: written to `<path>.tmp-XXXXXX`, then renamed over `path`.

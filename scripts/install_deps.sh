@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libopencv-dev liboctomap-dev libgeographiclib-dev libgdal-dev libtbb-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev libomp-dev
 )
 if [[ "${ROVERMAP_BENCH_PEERS:-OFF}" == "ON" ]]; then
   packages+=(libpcl-dev libopen3d-dev)

@@ -1,0 +1,104 @@
+#pragma once
+// The parser entry points the fuzz targets drive, shared with test_fuzz_regressions.cpp so that
+// a saved input replays through exactly the code the fuzzer ran. Each returns kParsed or
+// kRejected (the parser's typed error); any other exception, crash or sanitizer report escapes.
+
+#include <cpl_vsi.h>
+#include <gdal.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/Config.hpp"
+#include "config/ConfigError.hpp"
+#include "config/SequenceYaml.hpp"
+#include "eval/TrajectoryIo.hpp"
+#include "io/GeoTiff.hpp"
+#include "io/Inbox.hpp"
+#include "io/IoError.hpp"
+#include "io/PointCloudIo.hpp"
+#include "io/Tum.hpp"
+
+namespace rovermap::fuzz {
+
+enum class Outcome { kParsed, kRejected };
+
+// Runs `parse`; only the parser's documented error type counts as a rejection.
+template <typename Error, typename Parse>
+Outcome Run(const Parse& parse) {
+  try {
+    parse();
+    return Outcome::kParsed;
+  } catch (const Error&) {
+    return Outcome::kRejected;
+  }
+}
+
+inline Outcome Ply(std::string_view bytes) {
+  return Run<io::IoError>([&] { io::ParsePly(bytes, "fuzz.ply"); });
+}
+
+inline Outcome Xyz(std::string_view bytes) {
+  return Run<io::IoError>([&] { io::ParseXyz(bytes, "fuzz.xyz"); });
+}
+
+inline Outcome Tum(std::string_view bytes) {
+  return Run<io::IoError>([&] { io::ParseTum(bytes, "fuzz.tum"); });
+}
+
+// `eval`'s trajectory reader with the format detected from the first line (12 numbers: KITTI,
+// 8: TUM), as `--format auto` reads it.
+inline Outcome Kitti(std::string_view bytes) {
+  return Run<io::IoError>(
+      [&] { eval::ParseTrajectory(bytes, "fuzz.txt", eval::TrajectoryFormat::kAuto); });
+}
+
+inline Outcome SequenceYaml(std::string_view bytes) {
+  return Run<config::ConfigError>([&] { config::ParseSequenceYaml(bytes, "sequence.yaml"); });
+}
+
+inline Outcome ConfigFile(std::string_view bytes) {
+  return Run<config::ConfigError>([&] { config::ParseConfig(bytes, "fuzz.yaml", {}); });
+}
+
+// `--set` values: one override per line (the last newline ends a line), applied in order as
+// the command line does.
+inline Outcome SetOverrides(std::string_view bytes) {
+  std::vector<std::string> overrides;
+  std::size_t start = 0;
+  while (start < bytes.size()) {
+    std::size_t end = bytes.find('\n', start);
+    if (end == std::string_view::npos) end = bytes.size();
+    overrides.emplace_back(bytes.substr(start, end - start));
+    start = end + 1;
+  }
+  return Run<config::ConfigError>([&] { config::LoadConfig(std::nullopt, overrides); });
+}
+
+// The serve daemon's frames/NNNNNN.odom (and .gt): exactly one TUM line.
+inline Outcome Odom(std::string_view bytes) {
+  return Run<io::IoError>([&] { io::ParseFramePose(bytes, "000000.odom"); });
+}
+
+// `eval --dem`: the GeoTIFF reader on a GDAL in-memory file (no disk traffic per input).
+inline Outcome GeoTiff(std::string_view bytes) {
+  static const std::string kName = "/vsimem/rovermap_fuzz.tif";
+  // GDAL's block cache (5 % of RAM by default) would count against -rss_limit_mb on top of what
+  // the reader allocates, which is what this target bounds (ReadDemGeoTiff: 1 GiB).
+  static const bool kCacheCapped = (GDALSetCacheMax64(std::int64_t{64} << 20), true);
+  (void)kCacheCapped;
+  std::vector<GByte> copy(bytes.begin(), bytes.end());  // GDAL wants a mutable buffer
+  VSILFILE* file = VSIFileFromMemBuffer(kName.c_str(), copy.data(), copy.size(), FALSE);
+  if (file == nullptr) return Outcome::kRejected;
+  VSIFCloseL(file);
+  struct Unlink {
+    ~Unlink() { VSIUnlink(kName.c_str()); }
+  } unlink;
+  return Run<io::IoError>([&] { io::ReadDemGeoTiff(kName); });
+}
+
+}  // namespace rovermap::fuzz
