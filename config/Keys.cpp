@@ -279,6 +279,8 @@ std::vector<KeyEntry> BuildRegistry() {
                "between looks at the inbox when polling; longest wait otherwise");
   serve.Double("gap_timeout_s", &V::gap_timeout_s, "s", AtLeast(0),
                "a missing frame holds the queue this long, then is declared missing");
+  serve.Int("max_gap_frames", &V::max_gap_frames, "frames", AtLeast(1),
+            "a ready frame further than this beyond the next expected is rejected");
   serve.Int("publish_every", &V::publish_every, "frames", AtLeast(1),
             "publish the outputs after this many frames (and on exit)");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),

@@ -159,6 +159,21 @@ void Daemon::Run(const std::atomic<int>& stop) {
 bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
   RejectLate(files);
   const std::size_t next = state_.next_index;
+  // A ready frame numbered far beyond the queue is misnumbered: waiting it out would declare
+  // every index between missing (10^12 of them for a stray 999999999999.ply).
+  const std::size_t limit = next + static_cast<std::size_t>(setup_.serve.max_gap_frames);
+  bool rejected = false;
+  for (auto far = files.upper_bound(limit); far != files.end(); ++far) {
+    if (!far->second.Complete(sequence_.sensor_type)) continue;
+    inbox_.Reject(far->first, "index " + std::to_string(far->first) + " is more than " +
+                                  std::to_string(setup_.serve.max_gap_frames) +
+                                  " beyond the next frame expected, " + std::to_string(next) +
+                                  " (serve.max_gap_frames): misnumbered");
+    Log("serve: frame " + std::to_string(far->first) + " rejected: misnumbered, " +
+        std::to_string(next) + " expected next");
+    rejected = true;
+  }
+  if (rejected) return true;
   const auto it = files.find(next);
   if (it != files.end() && it->second.Complete(sequence_.sensor_type)) {
     gap_since_.reset();
@@ -185,10 +200,32 @@ bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
   const auto ready = std::find_if(files.upper_bound(next), files.end(), [&](const auto& entry) {
     return entry.second.Complete(sequence_.sensor_type);
   });
+  // Indices of which nothing came are journalled once per run (the journal holds the
+  // daemon's whole state with each record, so one record each would grow as the run squared).
+  std::optional<std::size_t> run_start;
+  const auto journal_run = [&](std::size_t end) {
+    if (!run_start) return;
+    checkpoint_->Append(nullptr, state_);
+    Log("serve: " +
+        (end - *run_start == 1
+             ? "frame " + std::to_string(*run_start)
+             : "frames " + std::to_string(*run_start) + " to " + std::to_string(end - 1)) +
+        " missing: nothing came within " + std::to_string(setup_.serve.gap_timeout_s) +
+        " s (serve.gap_timeout_s); not in the trajectory");
+    run_start.reset();
+  };
   for (std::size_t index = next; index < ready->first; ++index) {
     const auto present = files.find(index);
-    DeclareMissing(index, present != files.end() ? &present->second : nullptr);
+    if (present == files.end()) {
+      if (!run_start) run_start = index;
+      state_.missing.push_back(index);
+      ++state_.next_index;
+      continue;
+    }
+    journal_run(index);
+    DeclareMissing(index, present->second);
   }
+  journal_run(ready->first);
   return true;
 }
 
@@ -240,14 +277,14 @@ void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files) {
   busy_ms_ += MsBetween(start, Clock::now());
 }
 
-void Daemon::DeclareMissing(std::size_t index, const io::InboxFrameFiles* files) {
+void Daemon::DeclareMissing(std::size_t index, const io::InboxFrameFiles& files) {
   const std::string why = "missing: frame " + std::to_string(index) + " incomplete after " +
                           std::to_string(setup_.serve.gap_timeout_s) + " s (serve.gap_timeout_s)";
   // Its odometry line, if it came, still places it in the trajectory.
   std::optional<io::Frame> poses;
-  if (files != nullptr && files->odom) {
+  if (files.odom) {
     try {
-      poses = inbox_.ReadPoses(index, *files);
+      poses = inbox_.ReadPoses(index, files);
       if (poses->timestamp <= last_timestamp_) poses.reset();
     } catch (const io::IoError&) {
       poses.reset();
@@ -266,7 +303,7 @@ void Daemon::DeclareMissing(std::size_t index, const io::InboxFrameFiles* files)
   state_.missing.push_back(index);
   ++state_.next_index;
   checkpoint_->Append(nullptr, state_);
-  if (files != nullptr) inbox_.Reject(index, why);
+  inbox_.Reject(index, why);
   Log("serve: frame " + std::to_string(index) + " " + why + "; not in the trajectory");
 }
 

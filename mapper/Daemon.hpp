@@ -73,7 +73,8 @@ class Daemon {
   using Clock = std::chrono::steady_clock;
   bool Step(const std::map<std::size_t, io::InboxFrameFiles>& files);
   void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files);
-  void DeclareMissing(std::size_t index, const io::InboxFrameFiles* files);
+  /// A frame of which some files came, declared missing.
+  void DeclareMissing(std::size_t index, const io::InboxFrameFiles& files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
   void RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files);
   void Publish();

@@ -12,6 +12,9 @@ struct ServeOptions {
   /// [s] a missing frame index holds the queue this long once a later frame is complete; then
   /// it is declared missing and the daemon goes on.
   double gap_timeout_s = 30.0;
+  /// [frames] a ready frame numbered more than this beyond the next one expected is rejected as
+  /// misnumbered, instead of every index between being declared missing.
+  int max_gap_frames = 10000;
   /// [frames] publish the outputs (DESIGN §6) after this many frames, and on exit.
   int publish_every = 10;
   /// [frames] snapshot the state after this many frames (each frame is journalled anyway, so a

@@ -297,6 +297,39 @@ TEST_F(Serve, GapTimesOutAndIsRecordedThenALateFrameIsRejected) {
   EXPECT_EQ(summary["serve"]["missing_frames"], nlohmann::json::array({2, 3}));
 }
 
+// A ready frame numbered far beyond the queue (here 5 + 1000 with serve.max_gap_frames 100) is
+// rejected as misnumbered, not waited out; a run of 60 indices of which nothing came is declared
+// missing in one timeout and one log line, and the daemon goes on.
+TEST_F(Serve, MisnumberedFrameIsRejectedAndALongGapIsOneRun) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 0, "inbox");
+  for (std::size_t k : {0, 1}) DropFrame(kTinyCloud, inbox, k);
+  for (const char* ext : {".ply", ".gt", ".odom"}) {
+    fs::copy_file(inbox / "frames" / (std::string("000001") + ext),
+                  inbox / "frames" / (std::string("001005") + ext));
+  }
+  const fs::path out = dir_ / "out";
+  const pid_t pid = Start(
+      inbox, out, "log", {"--set", "serve.max_gap_frames=100", "--set", "serve.gap_timeout_s=0.3"});
+  ASSERT_FALSE(WaitForNext(out, 2).is_null()) << Slurp(dir_ / "log");
+  for (int i = 0; i < 500 && !fs::exists(inbox / "rejected" / "001005.reason"); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_NE(Slurp(inbox / "rejected" / "001005.reason").find("misnumbered"), std::string::npos);
+  EXPECT_FALSE(fs::exists(inbox / "frames" / "001005.ply"));
+  // Frame 62 after a gap of 60 (2..61): one timeout, one line, then it is taken.
+  Drop(inbox / "frames" / "000062.ply", Slurp(kTinyCloud / "frames" / "000002.ply"));
+  Drop(inbox / "frames" / "000062.gt", DataLines(kTinyCloud / "groundtruth.tum").at(2) + "\n");
+  Drop(inbox / "frames" / "000062.odom", DataLines(kTinyCloud / "odometry.tum").at(2) + "\n");
+  const nlohmann::json status = WaitForNext(out, 63);
+  ASSERT_FALSE(status.is_null()) << Slurp(dir_ / "log");
+  EXPECT_EQ(status["missing"].size(), 60u);
+  EXPECT_EQ(status["frames_done"], 3);
+  const std::string log = Slurp(dir_ / "log");
+  EXPECT_EQ(CountLines(log, "serve: frames 2 to 61 missing"), 1) << log;
+  Stop(pid);
+  EXPECT_EQ(DataLines(out / "trajectory.tum").size(), 3u);
+}
+
 // A missing frame whose odometry line came keeps its place in the trajectory, flagged.
 TEST_F(Serve, GapWithOdometryKeepsTheDeadReckoningPose) {
   const fs::path inbox = MakeInbox(kTinyCloud, 0, "inbox");
@@ -350,8 +383,10 @@ TEST_F(Serve, SecondSignalExitsAtOnceAndTheRestartStillEqualsReplay) {
   const fs::path replay = Replay(kTinyStereo);
   const fs::path inbox = MakeInbox(kTinyStereo, 3, "inbox");
   const fs::path out = dir_ / "out";
+  // status.json after every frame, so that the signals come while frames are still queued.
   const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1", "--set",
-                                          "serve.checkpoint_share=0"};
+                                          "serve.checkpoint_share=0", "--set",
+                                          "serve.status_interval_s=0"};
   const pid_t pid = Start(inbox, out, "log", every);
   ASSERT_FALSE(WaitForNext(out, 1).is_null()) << Slurp(dir_ / "log");
   ::kill(pid, SIGTERM);
