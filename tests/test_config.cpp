@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "config/Config.hpp"
+#include "tests/support/ErrorText.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::config {
@@ -51,13 +52,7 @@ std::string ReadFile(const fs::path& path) {
 
 // The message of the ConfigError that `load` throws, or a test failure.
 std::string ErrorOf(const std::function<void()>& load) {
-  try {
-    load();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "expected a ConfigError";
-  return "";
+  return rovermap::testing::ErrorOf<ConfigError>(load);
 }
 
 std::string OverrideError(const std::string& override_text) {

@@ -8,30 +8,22 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
-#include "tests/support/ScratchDir.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
+#include "tests/support/ErrorText.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::io {
 namespace {
 
 namespace fs = std::filesystem;
 
-::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "\"" << text << "\"\n does not contain \"" << part << "\"";
-}
+using rovermap::testing::Contains;
 
 std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const IoError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an IoError";
-  return "";
+  return rovermap::testing::ErrorOf<IoError>(f);
 }
 
 void Write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
