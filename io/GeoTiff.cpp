@@ -14,6 +14,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "io/DemLayers.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 
@@ -66,67 +67,40 @@ std::string MemoryFileName() {
 
 GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::ElevationMap& map,
                             const Georeference& georef, const GeoTiffOptions& options) {
-  if (std::abs(map.options().grid_rotation_rad - georef.convergence_rad()) > 1e-9) {
+  DemLayers layers;
+  try {
+    layers = RasteriseDem(map);
+  } catch (const IoError& e) {
+    throw IoError(path.string() + ": " + e.what());
+  }
+  return WriteDemGeoTiff(path, layers, georef, options);
+}
+
+GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const DemLayers& layers,
+                            const Georeference& georef, const GeoTiffOptions& options) {
+  if (std::abs(layers.grid_rotation_rad - georef.convergence_rad()) > 1e-9) {
     throw std::invalid_argument(
         "WriteDemGeoTiff: the map's grid_rotation_rad must equal the georeference's "
         "convergence_rad() so that the raster is north-up without resampling");
   }
   if (path.empty() || !path.has_filename()) throw IoError(path.string() + ": not a file path");
+  const std::size_t pixels =
+      static_cast<std::size_t>(layers.width) * static_cast<std::size_t>(layers.height);
+  if (layers.elevation_m.size() != pixels || layers.stddev_m.size() != pixels ||
+      layers.count.size() != pixels) {
+    throw std::invalid_argument("WriteDemGeoTiff: layers of the wrong size");
+  }
   RegisterGdal();
   QuietGdal quiet;
-
-  // Extent in grid cells; rows run north to south.
-  dem::CellIndex min{0, 0};
-  dem::CellIndex max{0, 0};
-  if (!map.bounds().Empty()) {
-    min = map.bounds().Min();
-    max = map.bounds().Max();
-  }
-  const std::int64_t width64 = max.x - min.x + 1;
-  const std::int64_t height64 = max.y - min.y + 1;
-  if (width64 * height64 > (std::int64_t{1} << 31) || width64 > (1 << 30) || height64 > (1 << 30)) {
-    throw IoError(path.string() + ": raster of " + std::to_string(width64) + " x " +
-                  std::to_string(height64) + " cells is too large");
-  }
   GeoTiffInfo info;
-  info.width = static_cast<int>(width64);
-  info.height = static_cast<int>(height64);
-  const auto pixels = static_cast<std::size_t>(width64) * static_cast<std::size_t>(height64);
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  std::vector<float> elevation(pixels, kNaN);
-  std::vector<float> stddev(pixels, kNaN);
-  std::vector<float> count(pixels, 0.0f);
+  info.width = layers.width;
+  info.height = layers.height;
+  info.valid_cells = layers.valid_cells;
 
-  // Copy tile rows straight into the raster.
-  const dem::GridIndex& index = map.index();
-  const int n = index.geometry().tile_cells;
-  for (const dem::TileIndex t : map.TileIndices()) {
-    const dem::Tile* tile = map.FindTile(t);
-    if (tile == nullptr || tile->filled == 0) continue;
-    for (int ly = 0; ly < n; ++ly) {
-      const dem::CellIndex row_start = index.TileLocalToCell(t, {0, ly});
-      if (row_start.y < min.y || row_start.y > max.y) continue;
-      const auto row = static_cast<std::size_t>(max.y - row_start.y);
-      for (int lx = 0; lx < n; ++lx) {
-        const std::size_t i = index.LinearIndex({lx, ly});
-        const dem::CellValue& v = tile->cells[i].value;
-        const std::int64_t cx = row_start.x + lx;
-        if (v.count == 0 || !map.Published({cx, row_start.y}, v)) continue;
-        if (cx < min.x || cx > max.x) continue;
-        const std::size_t o =
-            row * static_cast<std::size_t>(width64) + static_cast<std::size_t>(cx - min.x);
-        elevation[o] = v.elevation_m;
-        stddev[o] = std::sqrt(std::max(0.0f, v.variance_m2));
-        count[o] = static_cast<float>(v.count);
-        ++info.valid_cells;
-      }
-    }
-  }
-
-  const double s = index.geometry().cell_size_m;
+  const double s = layers.cell_size_m;
   const double k = georef.scale_factor();
-  const Eigen::Vector2d top_left =
-      georef.GridToProjected({static_cast<double>(min.x) * s, static_cast<double>(max.y + 1) * s});
+  const Eigen::Vector2d top_left = georef.GridToProjected(
+      {static_cast<double>(layers.min.x) * s, static_cast<double>(layers.max.y + 1) * s});
   info.geotransform = {top_left.x(), k * s, 0.0, top_left.y(), 0.0, -k * s};
 
   GDALDriver* mem_driver = GetGDALDriverManager()->GetDriverByName("MEM");
@@ -145,19 +119,22 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
                                           std::to_string(georef.origin().longitude_deg))
                                              .c_str());
   struct BandSpec {
-    std::vector<float>* data;
+    const std::vector<float>* data;
     const char* name;
     const char* unit;
   };
-  const BandSpec bands[3] = {
-      {&elevation, "elevation", "m"}, {&stddev, "elevation_stddev", "m"}, {&count, "count", ""}};
+  const BandSpec bands[3] = {{&layers.elevation_m, "elevation", "m"},
+                             {&layers.stddev_m, "elevation_stddev", "m"},
+                             {&layers.count, "count", ""}};
   for (int b = 0; b < 3; ++b) {
     GDALRasterBand* band = mem->GetRasterBand(b + 1);
     band->SetDescription(bands[b].name);
     if (*bands[b].unit != '\0') band->SetUnitType(bands[b].unit);
     band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-    if (band->RasterIO(GF_Write, 0, 0, info.width, info.height, bands[b].data->data(), info.width,
-                       info.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
+    // GF_Write only reads the buffer; RasterIO takes it as void* for both directions.
+    void* data = const_cast<float*>(bands[b].data->data());
+    if (band->RasterIO(GF_Write, 0, 0, info.width, info.height, data, info.width, info.height,
+                       GDT_Float32, 0, 0, nullptr) != CE_None) {
       Fail(path, "cannot fill band " + std::to_string(b + 1));
     }
   }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
+#include "io/DemLayers.hpp"
 #include "io/Georeference.hpp"
 
 namespace rovermap::io {
@@ -40,6 +41,11 @@ struct GeoTiffInfo {
 /// @throw IoError naming `path` if GDAL cannot write it, the raster would exceed 2^31 pixels,
 ///        or the rename fails; no file is left behind.
 GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::ElevationMap& map,
+                            const Georeference& georef, const GeoTiffOptions& options = {});
+/// The same from the map's layers (RasteriseDem), taken before: the serve daemon encodes them
+/// while the map goes on changing.
+/// @throw as above; std::invalid_argument also if the layers' sizes disagree.
+GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const DemLayers& layers,
                             const Georeference& georef, const GeoTiffOptions& options = {});
 
 /// A DEM GeoTIFF read back (row-major, row 0 = north, as stored).

@@ -48,6 +48,18 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
 void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
                      const std::vector<PreviewTrajectory>& trajectories,
                      const MapPreviewOptions& options) {
+  DemLayers layers;
+  try {
+    layers = RasteriseDem(map);
+  } catch (const IoError& e) {
+    throw IoError(path.string() + ": " + e.what());
+  }
+  WriteDemPreview(path, layers, trajectories, options);
+}
+
+void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options) {
   const auto encode_and_write = [&path](const cv::Mat& image) {
     std::vector<unsigned char> png;
     bool ok = false;
@@ -65,14 +77,20 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
     encode_and_write(image);
   };
-  if (map.bounds().Empty()) return no_data();
+  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) return no_data();
 
   // Raster of the map and the trajectories, decimated by `step` cells per pixel (the cell
   // nearest each pixel).
-  dem::CellBounds bounds = map.bounds();
+  dem::CellBounds bounds;
+  bounds.Extend(layers.min);
+  bounds.Extend(layers.max);
+  constexpr double kMaxCell = 1e12;  // a point this far out is not drawn (nor sizes the image)
   for (const PreviewTrajectory& trajectory : trajectories) {
     for (const Eigen::Vector3d& p : trajectory.points) {
-      if (const auto cell = map.WorldToCell(p.x(), p.y())) bounds.Extend(*cell);
+      const Eigen::Vector2d g = layers.WorldToGrid(p.x(), p.y()) / layers.cell_size_m;
+      if (!(std::abs(g.x()) < kMaxCell && std::abs(g.y()) < kMaxCell)) continue;
+      bounds.Extend({static_cast<std::int64_t>(std::floor(g.x())),
+                     static_cast<std::int64_t>(std::floor(g.y()))});
     }
   }
   const dem::CellIndex lo = bounds.Min();
@@ -87,18 +105,21 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
   cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   float z_min = std::numeric_limits<float>::infinity();
   float z_max = -z_min;
-  std::size_t published = 0;  // one pass over the cells: publishing tests 8 neighbours each
-  map.ForEachPublishedCell([&](dem::CellIndex c, const dem::CellValue& v) {
-    ++published;
-    const int col = static_cast<int>((c.x - lo.x) / step);
-    const int row = static_cast<int>((hi.y - c.y) / step);
-    float& px = height.at<float>(row, col);
-    px = std::isnan(px) ? v.elevation_m : std::max(px, v.elevation_m);
-    z_min = std::min(z_min, v.elevation_m);
-    z_max = std::max(z_max, v.elevation_m);
-  });
-  if (published == 0) return no_data();
-  const double pixel_m = map.options().cell_size_m * static_cast<double>(step);
+  for (int r = 0; r < layers.height; ++r) {
+    const std::int64_t cy = layers.max.y - r;
+    const int row = static_cast<int>((hi.y - cy) / step);
+    const float* z_row = layers.elevation_m.data() + static_cast<std::size_t>(r) * layers.width;
+    for (int c = 0; c < layers.width; ++c) {
+      const float z = z_row[c];
+      if (std::isnan(z)) continue;
+      const int col = static_cast<int>((layers.min.x + c - lo.x) / step);
+      float& px = height.at<float>(row, col);
+      px = std::isnan(px) ? z : std::max(px, z);
+      z_min = std::min(z_min, z);
+      z_max = std::max(z_max, z);
+    }
+  }
+  const double pixel_m = layers.cell_size_m * static_cast<double>(step);
   if (!(z_max > z_min)) z_max = z_min + 1.0f;
 
   // Hillshade (Horn-like central differences) and colour.
@@ -150,9 +171,9 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
     std::vector<cv::Point> line;
     for (const Eigen::Vector3d& p : trajectory.points) {
       if (!p.allFinite()) continue;
-      const Eigen::Vector2d g = map.WorldToGrid(p.x(), p.y());
-      const double gx = g.x() / map.options().cell_size_m - static_cast<double>(lo.x);
-      const double gy = static_cast<double>(hi.y + 1) - g.y() / map.options().cell_size_m;
+      const Eigen::Vector2d g = layers.WorldToGrid(p.x(), p.y());
+      const double gx = g.x() / layers.cell_size_m - static_cast<double>(lo.x);
+      const double gy = static_cast<double>(hi.y + 1) - g.y() / layers.cell_size_m;
       line.emplace_back(static_cast<int>(std::lround(gx / step * zoom)),
                         static_cast<int>(std::lround(gy / step * zoom)));
     }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
+#include "io/DemLayers.hpp"
 
 namespace rovermap::io {
 
@@ -33,6 +34,12 @@ struct PreviewTrajectory {
 /// atomically. A map with no published cell gives a small "no data" image.
 /// @throw IoError naming `path` if encoding or writing fails.
 void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options = {});
+
+/// The same from the map's layers (RasteriseDem), taken before: the serve daemon draws them
+/// while the map goes on changing.
+void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                      const std::vector<PreviewTrajectory>& trajectories,
                      const MapPreviewOptions& options = {});
 

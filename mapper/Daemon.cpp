@@ -135,6 +135,7 @@ void Daemon::Run(const std::atomic<int>& stop) {
     for (const auto& [index, present] : files) {
       if (index >= state_.next_index && present.Complete(sequence_.sensor_type)) ++waiting_;
     }
+    publisher_.Poll();  // a publication that failed stops the daemon (Run's @throw)
     if (Step(files)) continue;
     // Idle (the queue ran dry or waits on a gap): whoever monitors sees the latest.
     if (status_stale_) WriteStatus("running", waiting_);
@@ -151,6 +152,7 @@ void Daemon::Run(const std::atomic<int>& stop) {
     since_checkpoint_ = 0;
   }
   Publish();
+  publisher_.Wait();
   WriteStatus("stopped", waiting_);
   Log("serve: stopped after frame " + std::to_string(state_.next_index) + " (" +
       std::to_string(processed_) + " frames this run)");
@@ -339,8 +341,11 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   }
   if (++since_publish_ >= setup_.serve.publish_every) {
     const auto start = Clock::now();
+    const double last_write_ms = publisher_.last_write_ms();
     Publish();
-    writes << ", outputs published in " << MsBetween(start, Clock::now()) << " ms";
+    writes << ", outputs handed to the publisher in " << MsBetween(start, Clock::now()) << " ms";
+    if (last_write_ms > 0.0)
+      writes << " (the last publication wrote for " << last_write_ms << " ms)";
   }
   if (!writes.str().empty())
     Log("serve: after frame " + std::to_string(result->index) + writes.str());
@@ -377,8 +382,9 @@ void Daemon::Publish() {
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
-  WriteOutputs(setup_.out, *mapper_, run, setup_.eval,
-               [this](const std::string& file) { Fault("publish:" + file); });
+  // The state is taken here, between frames; the files are written beside the next frames.
+  publisher_.Publish(setup_.out, OutputState(*mapper_), std::move(run), setup_.eval,
+                     [this](const std::string& file) { Fault("publish:" + file); });
 }
 
 void Daemon::WriteStatus(const char* state, std::size_t waiting) {

@@ -18,6 +18,7 @@
 #include "io/Inbox.hpp"
 #include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/OutputPublisher.hpp"
 #include "mapper/ServeOptions.hpp"
 
 namespace rovermap::mapper {
@@ -107,6 +108,7 @@ class Daemon {
   std::size_t waiting_ = 0;
   bool status_stale_ = false;  // a frame done since status.json was written
   Clock::time_point status_written_{};
+  OutputPublisher publisher_;  // last: destroyed (joined) first
 };
 
 }  // namespace rovermap::mapper

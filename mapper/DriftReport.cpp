@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "eval/PlotPrimitives.hpp"
+#include "io/OctoMapIo.hpp"
 #include "mapper/Degeneracy.hpp"
 
 namespace rovermap::mapper {
@@ -101,9 +102,9 @@ std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& result
                       eval::EvaluateAssociated(odometry, truth, options)};
 }
 
-nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
+nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift) {
-  const std::vector<FrameResult>& results = mapper.results();
+  const std::vector<FrameResult>& results = state.results;
   std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0;
   for (const FrameResult& r : results) {
     if (r.status == FrameStatus::kRegistered || r.status == FrameStatus::kPartial) ++registered;
@@ -112,7 +113,6 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
     if (r.status == FrameStatus::kBadFrame) ++bad;
     outliers += r.outliers_removed;
   }
-  const PoseChain* chain = mapper.chain();
   nlohmann::json timing = {
       {"load", StageJson(results, [](const StageTimes& t) { return t.load_ms; })},
       {"stereo", StageJson(results, [](const StageTimes& t) { return t.stereo_ms; })},
@@ -123,7 +123,6 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
       {"frame", StageJson(results, [](const StageTimes& t) { return t.total_ms + t.load_ms; })},
       {"write", {{"total_ms", run.write_ms}}},
       {"wall_ms", run.wall_ms}};
-  const dem::ElevationMap& map = mapper.elevation_map();
   nlohmann::json summary = {
       {"sequence", run.sequence},
       {"frames", results.size()},
@@ -131,27 +130,27 @@ nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
       {"partial", partial},
       {"fallbacks", fallbacks},
       {"bad_frames", bad},
-      {"distance_m", chain ? chain->path_length_m() : 0.0},
-      {"final_correction",
-       CorrectionJson(chain ? chain->back().cumulative_correction : Eigen::Isometry3d::Identity())},
+      {"distance_m", state.distance_m},
+      {"final_correction", CorrectionJson(state.final_correction)},
       {"timing", timing},
       {"frames_per_second",
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
       {"peak_rss_mb", run.peak_rss_mb},
       {"dem",
-       {{"cells", run.dem_cells ? *run.dem_cells : map.PublishedCellCount()},
-        {"cells_reached", map.CellCount()},
-        {"tiles", map.TileCount()},
-        {"cell_size_m", map.options().cell_size_m},
+       {{"cells", run.dem_cells.value_or(state.dem.valid_cells)},
+        {"cells_reached", state.dem_cells_reached},
+        {"tiles", state.dem_tiles},
+        {"cell_size_m", state.dem.cell_size_m},
         {"outliers_removed", outliers}}},
   };
-  if (mapper.sensor().type == io::SensorType::kStereo) {
-    summary["stereo"] = {{"num_disparities", mapper.sensor().stereo.num_disparities}};
+  if (state.stereo_num_disparities) {
+    summary["stereo"] = {{"num_disparities", *state.stereo_num_disparities}};
   }
-  if (const auto* tree = mapper.octomap().tree()) {
+  if (state.octomap_bt) {
     summary["octomap"] = {
-        {"leaves", run.octomap_leaves ? *run.octomap_leaves : tree->getNumLeafNodes()},
-        {"resolution_m", tree->getResolution()}};
+        {"leaves", run.octomap_leaves ? *run.octomap_leaves
+                                      : io::CountSerialisedLeaves(*state.octomap_bt, true)},
+        {"resolution_m", state.octomap_resolution_m}};
   }
   if (drift) {
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},

@@ -11,6 +11,7 @@
 #include "eval/EvalOptions.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/OutputState.hpp"
 
 namespace rovermap::mapper {
 
@@ -38,7 +39,7 @@ struct RunInfo {
   double write_ms = 0.0;     ///< writing the outputs before summary.json
   double peak_rss_mb = 0.0;  ///< PeakRssMb() at the end
   // What the writers counted as they wrote (WriteOutputs fills them); when absent, Summary
-  // counts in the maps, a walk over every cell and every OcTree node.
+  // counts them in the OutputState.
   std::optional<std::size_t> dem_cells;             ///< published DEM cells [count]
   std::optional<std::size_t> octomap_leaves;        ///< OcTree leaves [count]
   nlohmann::json extra = nlohmann::json::object();  ///< more top-level keys (serve's queue)
@@ -48,7 +49,7 @@ struct RunInfo {
 /// bad frames included), bad_frames, distance_m, final_correction, timing (per stage: total and
 /// per-frame median, ms), frames_per_second, peak_rss_mb, dem and octomap figures, and `metrics`
 /// {registered, odometry} (DESIGN §8 keys) when `drift` is given.
-nlohmann::json Summary(const Mapper& mapper, const RunInfo& run,
+nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift);
 
 /// drift.png: the increment correction per frame (translation, rotation; fallbacks marked) and

@@ -1,6 +1,7 @@
 #include "mapper/Outputs.hpp"
 
 #include <chrono>
+#include <utility>
 #include <vector>
 
 #include "io/FileUtil.hpp"
@@ -14,11 +15,17 @@ namespace rovermap::mapper {
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
                             const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file) {
+  return WriteOutputs(out_dir, OutputState(mapper), std::move(run), eval_options, after_file);
+}
+
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputState& state,
+                            RunInfo run, const eval::EvalOptions& eval_options,
+                            const std::function<void(const std::string&)>& after_file) {
   const auto done = [&](const char* name) {
     if (after_file) after_file(name);
   };
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<FrameResult>& results = mapper.results();
+  const std::vector<FrameResult>& results = state.results;
 
   std::vector<io::StampedPose> trajectory, odometry;
   // dem.png: ground truth (when every frame has it), dead reckoning, registered on top.
@@ -44,15 +51,15 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   done("drift.csv");
 
   run.dem_cells =
-      io::WriteDemGeoTiff(out_dir / "dem.tif", mapper.elevation_map(), mapper.georeference())
-          .valid_cells;
+      io::WriteDemGeoTiff(out_dir / "dem.tif", state.dem, state.georeference).valid_cells;
   done("dem.tif");
-  if (const octomap::OcTree* tree = mapper.octomap().tree()) {
-    run.octomap_leaves = io::WriteOctoMap(out_dir / "map.bt", *tree).leaves;
+  if (state.octomap_bt) {
+    io::WriteFileAtomically(out_dir / "map.bt", *state.octomap_bt);
+    run.octomap_leaves = io::CountSerialisedLeaves(*state.octomap_bt, /*binary=*/true);
     done("map.bt");
-    if (mapper.options().octomap.write_ot) io::WriteOctoMap(out_dir / "map.ot", *tree);
   }
-  io::WriteDemPreview(out_dir / "dem.png", mapper.elevation_map(), drawn);
+  if (state.octomap_ot) io::WriteFileAtomically(out_dir / "map.ot", *state.octomap_ot);
+  io::WriteDemPreview(out_dir / "dem.png", state.dem, drawn);
   done("dem.png");
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
   WriteDriftPlot(out_dir / "drift.png", results, drift);
@@ -61,7 +68,7 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
   run.write_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
-  const nlohmann::json summary = Summary(mapper, run, drift);
+  const nlohmann::json summary = Summary(state, run, drift);
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
   done("summary.json");
   return summary;

@@ -3,12 +3,13 @@
 
 #include <filesystem>
 #include <functional>
-#include <string>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "eval/EvalOptions.hpp"
 #include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/OutputState.hpp"
 
 namespace rovermap::mapper {
 
@@ -22,6 +23,12 @@ namespace rovermap::mapper {
 /// @throw io::IoError naming the file that could not be written.
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
                             const eval::EvalOptions& eval_options,
+                            const std::function<void(const std::string&)>& after_file = {});
+
+/// The same from an OutputState taken before (the daemon writes it on a thread of its own).
+/// Touches nothing but `state` and `out_dir`.
+nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputState& state,
+                            RunInfo run, const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file = {});
 
 }  // namespace rovermap::mapper

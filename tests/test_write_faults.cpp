@@ -401,6 +401,9 @@ class ServeFault : public WriteFaults {
                                      "--set",
                                      "serve.poll_interval_s=0.05"};
     for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
+    // A run that failed may have left a status.json ahead of its last publication (the frames
+    // go on while a publication is written): wait for this run's own.
+    if (stop_at > 0) fs::remove(out_ / "status.json");
     const auto reached = [this, stop_at] {
       const nlohmann::json s = nlohmann::json::parse(Slurp(out_ / "status.json"), nullptr, false);
       return !s.is_discarded() && s.is_object() && s.value("next_frame", std::size_t{0}) >= stop_at;

@@ -111,14 +111,19 @@ class ServeFixture : public CommandFixture {
     return -1;
   }
 
-  // status.json once its next_frame reached `next` (null json on timeout).
+  // status.json once its next_frame reached `next`, written by a daemon still running (not one
+  // reaped before: a killed run's status can be ahead of its journal, since the publications
+  // run beside the frames); null json on timeout.
   nlohmann::json WaitForNext(const std::filesystem::path& out, std::size_t next,
                              double timeout_s = 60.0) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (std::chrono::steady_clock::now() < until) {
       if (std::filesystem::exists(out / "status.json")) {
         const nlohmann::json s = nlohmann::json::parse(Slurp(out / "status.json"), nullptr, false);
-        if (!s.is_discarded() && s.value("next_frame", std::size_t{0}) >= next) return s;
+        const bool ours = !s.is_discarded() &&
+                          std::find(running_.begin(), running_.end(), s.value("pid", pid_t{-1})) !=
+                              running_.end();
+        if (ours && s.value("next_frame", std::size_t{0}) >= next) return s;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }

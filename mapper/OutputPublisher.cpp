@@ -1,0 +1,43 @@
+#include "mapper/OutputPublisher.hpp"
+
+#include <chrono>
+#include <utility>
+
+#include "mapper/Outputs.hpp"
+
+namespace rovermap::mapper {
+
+OutputPublisher::~OutputPublisher() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void OutputPublisher::Publish(std::filesystem::path out_dir, OutputState state, RunInfo run,
+                              eval::EvalOptions eval_options,
+                              std::function<void(const std::string&)> after_file) {
+  Wait();
+  finished_ = false;
+  thread_ = std::thread([this, out_dir = std::move(out_dir), state = std::move(state),
+                         run = std::move(run), eval_options = std::move(eval_options),
+                         after_file = std::move(after_file)]() mutable {
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      WriteOutputs(out_dir, state, std::move(run), eval_options, after_file);
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+    last_write_ms_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    finished_ = true;
+  });
+}
+
+void OutputPublisher::Poll() {
+  if (thread_.joinable() && finished_.load()) Wait();
+}
+
+void OutputPublisher::Wait() {
+  if (thread_.joinable()) thread_.join();
+  if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+}
+
+}  // namespace rovermap::mapper

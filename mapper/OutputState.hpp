@@ -1,0 +1,37 @@
+#pragma once
+// What the outputs of DESIGN §6 are made of, copied out of a Mapper: the results, the DEM's
+// published layers, the OctoMap's serialised bytes and the few figures summary.json reports.
+// Taking it costs a pass over the DEM's tiles and one over the OcTree; writing it (encoding
+// the GeoTIFF and the PNGs, most of a publication) can then go on beside the mapper.
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/DemLayers.hpp"
+#include "io/Georeference.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+struct OutputState {
+  /// Waits for the OctoMap's thread to insert what is queued (Mapper::octomap()).
+  /// @throw io::IoError if the DEM's raster would be too large (io::RasteriseDem).
+  explicit OutputState(const Mapper& mapper);
+
+  std::vector<FrameResult> results;
+  io::Georeference georeference;
+  io::DemLayers dem;                      ///< the published cells (dem.tif, dem.png)
+  std::size_t dem_cells_reached = 0;      ///< cells holding a point, published or not [count]
+  std::size_t dem_tiles = 0;              ///< tiles allocated [count]
+  std::optional<std::string> octomap_bt;  ///< map.bt's bytes; none when the OctoMap is off
+  std::optional<std::string> octomap_ot;  ///< map.ot's, with octomap.write_ot
+  double octomap_resolution_m = 0.0;
+  double distance_m = 0.0;  ///< path length of the registered chain
+  Eigen::Isometry3d final_correction = Eigen::Isometry3d::Identity();
+  std::optional<int> stereo_num_disparities;  ///< stereo sequences only
+};
+
+}  // namespace rovermap::mapper
