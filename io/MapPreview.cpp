@@ -164,10 +164,16 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   const double px_per_m = zoom / pixel_m;
 
   // Trajectories in grid pixels.
-  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  struct LegendLine {
+    std::string label;
+    cv::Scalar colour;
+    int width;
+  };
+  std::vector<LegendLine> legend;
   for (const PreviewTrajectory& trajectory : trajectories) {
     const cv::Scalar colour(trajectory.rgb[2], trajectory.rgb[1], trajectory.rgb[0]);
-    if (!trajectory.label.empty()) legend.emplace_back(trajectory.label, colour);
+    if (!trajectory.label.empty())
+      legend.push_back({trajectory.label, colour, std::max(1, trajectory.width_px)});
     std::vector<cv::Point> line;
     for (const Eigen::Vector3d& p : trajectory.points) {
       if (!p.allFinite()) continue;
@@ -178,8 +184,9 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                         static_cast<int>(std::lround(gy / step * zoom)));
     }
     if (!line.empty()) {
-      cv::polylines(map_image, line, false, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
-      cv::polylines(map_image, line, false, colour, 2, cv::LINE_AA);
+      const int width = std::max(1, trajectory.width_px);
+      cv::polylines(map_image, line, false, cv::Scalar(0, 0, 0), width + 2, cv::LINE_AA);
+      cv::polylines(map_image, line, false, colour, width, cv::LINE_AA);
       cv::circle(map_image, line.front(), 5, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
       cv::circle(map_image, line.front(), 3, colour, cv::FILLED, cv::LINE_AA);
     }
@@ -229,10 +236,11 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   cv::arrowedLine(canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
   cv::putText(canvas, "N", {nx - 24, sy + 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
   int ly = sy + 30;
-  for (const auto& [label, colour] : legend) {
-    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, cv::Scalar(0, 0, 0), 4, cv::LINE_AA);
-    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, colour, 2, cv::LINE_AA);
-    cv::putText(canvas, label, {margin + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
+  for (const LegendLine& l : legend) {
+    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, cv::Scalar(0, 0, 0), l.width + 2,
+             cv::LINE_AA);
+    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, l.colour, l.width, cv::LINE_AA);
+    cv::putText(canvas, l.label, {margin + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
                 cv::LINE_AA);
     ly += 20;
   }

@@ -27,6 +27,9 @@ struct PreviewTrajectory {
   std::string label;  ///< legend text ("registered"); empty: no legend line
   std::array<unsigned char, 3> rgb{255, 255, 255};
   std::vector<Eigen::Vector3d> points;  ///< world x, y [m] (z ignored)
+  /// [px] line width (outlined 1 px each side): a wide line drawn first shows as a band around
+  /// the narrower ones drawn over it, where they coincide
+  int width_px = 2;
 };
 
 /// Renders `map`'s published cells with `trajectories` (each a coloured line with a black

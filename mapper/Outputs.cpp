@@ -28,8 +28,9 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   const std::vector<FrameResult>& results = state.results;
 
   std::vector<io::StampedPose> trajectory, odometry;
-  // dem.png: ground truth (when every frame has it), dead reckoning, registered on top.
-  io::PreviewTrajectory truth_xy{"ground truth", {40, 200, 40}, {}};
+  // dem.png: ground truth (when every frame has it) as a wide band, dead reckoning, registered
+  // on top: where the registered path follows the truth, the truth shows on both sides of it.
+  io::PreviewTrajectory truth_xy{"ground truth", {40, 200, 40}, {}, 8};
   io::PreviewTrajectory odometry_xy{"dead reckoning", {230, 60, 40}, {}};
   io::PreviewTrajectory registered_xy{"registered", {255, 255, 255}, {}};
   for (const FrameResult& r : results) {

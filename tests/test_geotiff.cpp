@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "tests/support/ScratchDir.hpp"
 #include "dem/ElevationMap.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
 #include "io/IoError.hpp"
 #include "io/MapPreview.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::io {
 namespace {
@@ -313,6 +313,34 @@ TEST(MapPreview, WritesAnAnnotatedPng) {
   WriteDemPreview(dir / "empty.png", dem::ElevationMap{});
   EXPECT_FALSE(cv::imread((dir / "empty.png").string()).empty());
   EXPECT_THROW(WriteDemPreview(dir / "missing" / "dem.png", map), IoError);
+}
+
+// Where the registered path follows the truth, the truth must still show: it is drawn first and
+// wider, so a band of its colour runs along both sides of the path drawn over it.
+TEST(MapPreview, AWidePathDrawnFirstShowsAroundTheNarrowOneOverIt) {
+  const Georeference georef({47.3, 17.8, 400.0});
+  const dem::ElevationMap map =
+      FillBox(georef, 0.1, -10.0, 10.0, -10.0, 10.0, [](double, double) { return 0.0; });
+  std::vector<Eigen::Vector3d> path;
+  for (int i = 0; i < 50; ++i) path.emplace_back(-8.0 + 0.3 * i, 0.2 * i - 4.0, 0.0);
+  const auto green_pixels = [&](int truth_width_px) {
+    PreviewTrajectory truth{"ground truth", {40, 200, 40}, path, truth_width_px};
+    PreviewTrajectory registered{"registered", {255, 255, 255}, path};
+    const fs::path file = TempDir("halo") / "dem.png";
+    WriteDemPreview(file, map, {truth, registered});
+    const cv::Mat image = cv::imread(file.string());
+    int n = 0;
+    for (int r = 0; r < image.rows; ++r) {
+      for (int c = 0; c < image.cols; ++c) {
+        const cv::Vec3b p = image.at<cv::Vec3b>(r, c);  // BGR
+        n += p[1] > 150 && p[0] < 90 && p[2] < 90 ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  const int hidden = green_pixels(2);  // as wide as the path over it: covered, but the legend
+  const int shown = green_pixels(8);
+  EXPECT_GT(shown, 10 * hidden) << hidden << " " << shown;  // measured: 95 and 1495
 }
 
 }  // namespace
