@@ -146,10 +146,10 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
   if (state.stereo_num_disparities) {
     summary["stereo"] = {{"num_disparities", *state.stereo_num_disparities}};
   }
-  if (state.octomap_bt) {
+  if (const auto& tree = state.octomap.get()) {
     summary["octomap"] = {
         {"leaves", run.octomap_leaves ? *run.octomap_leaves
-                                      : io::CountSerialisedLeaves(*state.octomap_bt, true)},
+                                      : io::CountSerialisedLeaves(tree->bt, /*binary=*/true)},
         {"resolution_m", state.octomap_resolution_m}};
   }
   if (drift) {

@@ -138,13 +138,18 @@ class Mapper {
   const dem::ElevationMap& elevation_map() const { return elevation_map_; }
   /// The OctoMap, once every frame processed so far is in it (insertion runs on its own thread).
   const dem::OctoMapFusion& octomap() const { return octomap_.Fusion(); }
+  /// The OctoMap's bytes once the frames processed so far are in, made on its thread (no wait
+  /// here; see OctoMapWorker::SerialiseWhenQueuedIn).
+  std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapBytes(bool with_ot) const {
+    return octomap_.SerialiseWhenQueuedIn(with_ot);
+  }
   const io::Georeference& georeference() const { return georef_; }
   const io::SequenceInfo& sequence() const { return sequence_; }
   const PipelineOptions& options() const { return options_; }
   const SensorSetup& sensor() const { return sensor_; }
 
  private:
-  struct Registered;  // the outcome of register + judge + blend
+  struct Registered;               // the outcome of register + judge + blend
   friend struct CheckpointAccess;  // mapper/Checkpoint: the state to and from disk
   FrameResult Process(const io::Frame& frame, LoadedFrame loaded, double load_ms,
                       const FrameResult* recorded);

@@ -3,6 +3,8 @@
 #include <chrono>
 #include <utility>
 
+#include "dem/OcTreeBytes.hpp"
+
 namespace rovermap::mapper {
 
 OctoMapWorker::OctoMapWorker(const dem::OctoMapOptions& options)
@@ -22,7 +24,7 @@ void OctoMapWorker::Insert(std::vector<Eigen::Vector3d> points_world,
   if (!fusion_.enabled()) return;
   std::unique_lock<std::mutex> lock(mutex_);
   changed_.wait(lock, [this] { return !queued_.has_value(); });
-  queued_ = Job{std::move(points_world), sensor_origin_world};
+  queued_ = Job{std::move(points_world), sensor_origin_world, {}};
   changed_.notify_all();
 }
 
@@ -43,6 +45,38 @@ double OctoMapWorker::last_insert_ms() const {
   return last_insert_ms_;
 }
 
+std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapWorker::SerialiseWhenQueuedIn(
+    bool with_ot) const {
+  std::promise<std::optional<TreeBytes>> promise;
+  std::shared_future<std::optional<TreeBytes>> bytes = promise.get_future().share();
+  if (!fusion_.enabled()) {
+    promise.set_value(std::nullopt);
+    return bytes;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // After the frame still queued, or as a job of its own after the one being inserted.
+    if (!queued_) queued_ = Job{{}, Eigen::Vector3d::Zero(), {}};
+    queued_->serialise.emplace_back(with_ot, std::move(promise));
+  }
+  changed_.notify_all();
+  return bytes;
+}
+
+void OctoMapWorker::Serialise(
+    std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>>* requests) const {
+  for (auto& [with_ot, promise] : *requests) {
+    try {
+      TreeBytes bytes;
+      bytes.bt = dem::BinaryOcTreeBytes(*fusion_.tree());
+      if (with_ot) bytes.ot = dem::FullOcTreeBytes(*fusion_.tree());
+      promise.set_value(std::move(bytes));
+    } catch (...) {  // std::bad_alloc: the writer's get() rethrows it
+      promise.set_exception(std::current_exception());
+    }
+  }
+}
+
 void OctoMapWorker::Loop() {
   for (;;) {
     Job job;
@@ -56,13 +90,14 @@ void OctoMapWorker::Loop() {
     }
     changed_.notify_all();  // a producer may queue the next frame meanwhile
     const auto start = std::chrono::steady_clock::now();
-    fusion_.InsertFrame(job.points, job.origin);
+    if (!job.points.empty()) fusion_.InsertFrame(job.points, job.origin);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    Serialise(&job.serialise);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       busy_ = false;
-      last_insert_ms_ = ms;
+      if (!job.points.empty()) last_insert_ms_ = ms;
     }
     changed_.notify_all();
   }

@@ -5,9 +5,12 @@
 
 #include <Eigen/Core>
 #include <condition_variable>
+#include <future>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "dem/OctoMapFusion.hpp"
@@ -36,16 +39,30 @@ class OctoMapWorker {
   /// Milliseconds the last finished insertion took (for the report).
   double last_insert_ms() const;
 
+  /// The tree's bytes as map.bt writes them (and map.ot's with `with_ot`), made on the worker's
+  /// thread once every frame queued so far is in: the caller does not wait for the insertions
+  /// (a publication's state is taken between frames; the writer waits for these instead).
+  struct TreeBytes {
+    std::string bt;
+    std::string ot;  ///< empty unless asked for
+  };
+  /// Never throws; the future holds nullopt when the OctoMap is off.
+  std::shared_future<std::optional<TreeBytes>> SerialiseWhenQueuedIn(bool with_ot) const;
+
  private:
   void Loop();
   struct Job {
-    std::vector<Eigen::Vector3d> points;
+    std::vector<Eigen::Vector3d> points;  // none: a serialisation only
     Eigen::Vector3d origin;
+    // Serialisations asked for once this job's points are in.
+    std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>> serialise;
   };
+  void Serialise(
+      std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>>* requests) const;
   dem::OctoMapFusion fusion_;
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
-  std::optional<Job> queued_;
+  mutable std::optional<Job> queued_;  // mutable: a serialisation is queued by const callers
   bool busy_ = false;
   bool stop_ = false;
   double last_insert_ms_ = 0.0;

@@ -1,7 +1,5 @@
 #include "mapper/OutputState.hpp"
 
-#include "dem/OcTreeBytes.hpp"
-
 namespace rovermap::mapper {
 
 OutputState::OutputState(const Mapper& mapper)
@@ -10,11 +8,9 @@ OutputState::OutputState(const Mapper& mapper)
       dem(io::RasteriseDem(mapper.elevation_map())),
       dem_cells_reached(mapper.elevation_map().CellCount()),
       dem_tiles(mapper.elevation_map().TileCount()) {
-  if (const octomap::OcTree* tree = mapper.octomap().tree()) {
-    octomap_bt = dem::BinaryOcTreeBytes(*tree);
-    if (mapper.options().octomap.write_ot) octomap_ot = dem::FullOcTreeBytes(*tree);
-    octomap_resolution_m = tree->getResolution();
-  }
+  write_ot = mapper.options().octomap.write_ot;
+  octomap = mapper.OctoMapBytes(write_ot);
+  octomap_resolution_m = mapper.options().octomap.resolution_m;
   if (const PoseChain* chain = mapper.chain()) {
     distance_m = chain->path_length_m();
     final_correction = chain->back().cumulative_correction;

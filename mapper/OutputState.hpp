@@ -1,8 +1,9 @@
 #pragma once
 // What the outputs of DESIGN §6 are made of, copied out of a Mapper: the results, the DEM's
 // published layers, the OctoMap's serialised bytes and the few figures summary.json reports.
-// Taking it costs a pass over the DEM's tiles and one over the OcTree; writing it (encoding
-// the GeoTIFF and the PNGs, most of a publication) can then go on beside the mapper.
+// Taking it costs a copy of the results and a pass over the DEM's tiles; the OcTree is
+// serialised on the OctoMap's own thread. Writing it (encoding the GeoTIFF and the PNGs, most
+// of a publication) can then go on beside the mapper.
 
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -17,17 +18,19 @@
 namespace rovermap::mapper {
 
 struct OutputState {
-  /// Waits for the OctoMap's thread to insert what is queued (Mapper::octomap()).
+  /// Does not wait for the OctoMap's thread (Mapper::OctoMapBytes).
   /// @throw io::IoError if the DEM's raster would be too large (io::RasteriseDem).
   explicit OutputState(const Mapper& mapper);
 
   std::vector<FrameResult> results;
   io::Georeference georeference;
-  io::DemLayers dem;                      ///< the published cells (dem.tif, dem.png)
-  std::size_t dem_cells_reached = 0;      ///< cells holding a point, published or not [count]
-  std::size_t dem_tiles = 0;              ///< tiles allocated [count]
-  std::optional<std::string> octomap_bt;  ///< map.bt's bytes; none when the OctoMap is off
-  std::optional<std::string> octomap_ot;  ///< map.ot's, with octomap.write_ot
+  io::DemLayers dem;                  ///< the published cells (dem.tif, dem.png)
+  std::size_t dem_cells_reached = 0;  ///< cells holding a point, published or not [count]
+  std::size_t dem_tiles = 0;          ///< tiles allocated [count]
+  /// map.bt's bytes (map.ot's too with octomap.write_ot), made on the OctoMap's thread once
+  /// the frames taken are in: get() waits for them; nullopt when the OctoMap is off.
+  std::shared_future<std::optional<OctoMapWorker::TreeBytes>> octomap;
+  bool write_ot = false;
   double octomap_resolution_m = 0.0;
   double distance_m = 0.0;  ///< path length of the registered chain
   Eigen::Isometry3d final_correction = Eigen::Isometry3d::Identity();

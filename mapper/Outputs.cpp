@@ -54,12 +54,13 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   run.dem_cells =
       io::WriteDemGeoTiff(out_dir / "dem.tif", state.dem, state.georeference).valid_cells;
   done("dem.tif");
-  if (state.octomap_bt) {
-    io::WriteFileAtomically(out_dir / "map.bt", *state.octomap_bt);
-    run.octomap_leaves = io::CountSerialisedLeaves(*state.octomap_bt, /*binary=*/true);
+  const std::optional<OctoMapWorker::TreeBytes>& tree = state.octomap.get();
+  if (tree) {
+    io::WriteFileAtomically(out_dir / "map.bt", tree->bt);
+    run.octomap_leaves = io::CountSerialisedLeaves(tree->bt, /*binary=*/true);
     done("map.bt");
+    if (state.write_ot) io::WriteFileAtomically(out_dir / "map.ot", tree->ot);
   }
-  if (state.octomap_ot) io::WriteFileAtomically(out_dir / "map.ot", *state.octomap_ot);
   io::WriteDemPreview(out_dir / "dem.png", state.dem, drawn);
   done("dem.png");
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);

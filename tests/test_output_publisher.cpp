@@ -1,6 +1,7 @@
 // The daemon's background publications: an OutputState is the mapper as it was when taken (the
-// frames processed after it do not leak into the files), the layers it rasterises are the map's
-// published cells, and a publication's error comes back to the caller once.
+// frames processed after it do not leak into the files, the OctoMap's bytes included, which its
+// own thread serialises), the layers it rasterises are the map's published cells, and a
+// publication's error comes back to the caller once.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -12,10 +13,13 @@
 #include <thread>
 
 #include "config/Config.hpp"
+#include "dem/OcTreeBytes.hpp"
+#include "dem/OctoMapFusion.hpp"
 #include "io/DemLayers.hpp"
 #include "io/IoError.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/OctoMapWorker.hpp"
 #include "mapper/OutputPublisher.hpp"
 #include "mapper/OutputState.hpp"
 #include "mapper/Outputs.hpp"
@@ -101,6 +105,50 @@ TEST(OutputState, IsTheMapperAsItWasWhenTaken) {
   EXPECT_EQ(summary["frames"], 3);
   EXPECT_EQ(summary["dem"]["cells"], state.dem.valid_cells);
   EXPECT_GT(summary["octomap"]["leaves"].get<std::size_t>(), 0u);
+}
+
+// The OctoMap's bytes asked for after frame k are the tree after exactly k frames, whether the
+// request finds frame k still queued, being inserted, or done, and however many frames follow.
+TEST(OctoMapWorker, SerialisesTheTreeAsItWasWhenAsked) {
+  dem::OctoMapOptions options;
+  options.resolution_m = 0.2;
+  mapper::OctoMapWorker worker(options);
+  dem::OctoMapFusion serial(options);
+  const auto frame = [](int k) {
+    std::vector<Eigen::Vector3d> points;
+    for (int i = 0; i < 2000; ++i)
+      points.emplace_back(0.5 * k + 0.01 * (i % 100), 0.02 * (i / 100), 0.1 * std::sin(i + k));
+    return points;
+  };
+  const Eigen::Vector3d origin(0.0, 0.0, 1.5);
+  std::vector<std::shared_future<std::optional<mapper::OctoMapWorker::TreeBytes>>> asked;
+  std::vector<std::string> expected;
+  for (int k = 0; k < 6; ++k) {
+    worker.Insert(frame(k), origin);
+    serial.InsertFrame(frame(k), origin);
+    if (k % 2 == 1 || k == 4) {
+      asked.push_back(worker.SerialiseWhenQueuedIn(/*with_ot=*/k == 3));
+      expected.push_back(dem::BinaryOcTreeBytes(*serial.tree()));
+      if (k == 3) expected.push_back(dem::FullOcTreeBytes(*serial.tree()));
+    }
+  }
+  asked.push_back(worker.SerialiseWhenQueuedIn(false));  // twice in a row, nothing between
+  asked.push_back(worker.SerialiseWhenQueuedIn(false));
+  expected.push_back(dem::BinaryOcTreeBytes(*serial.tree()));
+  std::size_t e = 0;
+  for (std::size_t i = 0; i < asked.size(); ++i) {
+    const auto& bytes = asked[i].get();
+    ASSERT_TRUE(bytes.has_value());
+    const std::string& want = expected[std::min(e, expected.size() - 1)];
+    EXPECT_EQ(bytes->bt, want) << "request " << i;
+    ++e;
+    if (!bytes->ot.empty()) {
+      EXPECT_EQ(bytes->ot, expected[e++]) << "request " << i;
+    }
+  }
+  dem::OctoMapOptions off;
+  off.enabled = false;
+  EXPECT_FALSE(mapper::OctoMapWorker(off).SerialiseWhenQueuedIn(true).get().has_value());
 }
 
 TEST(OutputPublisher, AFailedPublicationIsReportedOnceNamingTheFile) {
