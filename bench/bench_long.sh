@@ -1,17 +1,28 @@
 #!/bin/bash
-# bench_long.sh [BUILD_DIR] [--frames N]: a long cloud traverse (default 2000 frames, a loop
-# over a 60 m terrain) through `rovermap replay` and through `rovermap serve` (every frame
-# already in the inbox, so the daemon takes them as fast as it can; its journal, snapshots
-# and publications included). Per run: the wall time per frame and the resident memory over
-# the first and the last tenth of the frames, sampled from /proc every 0.25 s. Flat means
-# neither grows with the sequence's length.
+# bench_long.sh [BUILD_DIR] [--frames N] [--exact-poses]: a long cloud traverse (default 2000
+# frames, a loop of 6 m radius, about 250 frames a lap, over a 60 m terrain) through `rovermap
+# replay` and through `rovermap serve` (every frame already in the inbox, so the daemon takes
+# them as fast as it can; its journal, snapshots and publications included). Per run: the wall
+# time per frame and the resident memory over the first and the last tenth of the frames,
+# sampled from /proc every 0.25 s. Flat means neither grows with the sequence's length.
+# --exact-poses: odometry without error and every increment taken from it
+# (mapper.min_inlier_ratio=1), so that each lap maps the very ground of the first: what the
+# maps hold when the trajectory does not drift (no registration runs, so the time per frame
+# is not the mapper's).
 set -euo pipefail
 
 BUILD=build
 N=2000
+SIM_SETS=()
+RUN_SETS=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --frames) N=$2; shift 2 ;;
+    --exact-poses)
+      for k in odom_scale_error odom_slip_mean odom_slip_sigma heading_bias_deg_s \
+        heading_random_walk_deg_rt_s; do SIM_SETS+=(--set "sim.$k=0"); done
+      RUN_SETS=(--set mapper.min_inlier_ratio=1)
+      shift ;;
     *) BUILD=$1; shift ;;
   esac
 done
@@ -55,10 +66,11 @@ report() {
 
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
 "$R" simulate --out "$W/seq" --set sim.sensor=cloud --set sim.cloud_stride_px=3 \
-  --set sim.frames="$N" --set sim.path=loop --set sim.terrain_size_m=60 >/dev/null 2>&1
+  --set sim.frames="$N" --set sim.path=loop --set sim.terrain_size_m=60 ${SIM_SETS[@]+"${SIM_SETS[@]}"} \
+  >/dev/null 2>&1
 
 # replay
-"$R" replay "$W/seq" --out "$W/replay" >/dev/null 2>"$W/replay.log" &
+"$R" replay "$W/seq" --out "$W/replay" ${RUN_SETS[@]+"${RUN_SETS[@]}"} >/dev/null 2>"$W/replay.log" &
 pid=$!
 sample $pid "$W/replay.log" "^replay: frame " "$W/replay.samples"
 wait $pid
@@ -69,7 +81,7 @@ cp "$W/seq/sequence.yaml" "$W/inbox/"
 awk '!/^#/' "$W/seq/odometry.tum" | split -l 1 -d -a 6 - "$W/inbox/frames/x"
 for f in "$W"/inbox/frames/x*; do mv "$f" "$W/inbox/frames/${f##*/x}.odom"; done
 for f in "$W"/seq/frames/*.ply; do ln "$f" "$W/inbox/frames/"; done
-"$R" serve --inbox "$W/inbox" --out "$W/serve" 2>"$W/serve.log" &
+"$R" serve --inbox "$W/inbox" --out "$W/serve" ${RUN_SETS[@]+"${RUN_SETS[@]}"} 2>"$W/serve.log" &
 pid=$!
 ( until grep -q "\"next_frame\": $N," "$W/serve/status.json" 2>/dev/null; do sleep 0.25; done
   kill -TERM $pid ) &

@@ -47,9 +47,40 @@ struct FrameCost {
   mapper::StageTimes stages;
 };
 
-// Replays `sequence` as replay does (read, then ProcessFrame), timing every frame.
+// Where the resident memory is, after some frame: the maps' own bytes, the per-frame results,
+// and the rest (the frames in hand, the trees, the allocator's free lists).
+struct MemorySplit {
+  std::size_t frames = 0;
+  double rss_mb = 0.0;
+  double dem_mb = 0.0;      // ElevationMap::MemoryBytes: the tiles' layers
+  double octomap_mb = 0.0;  // OcTree::memoryUsage: nodes and child arrays
+  double results_mb = 0.0;  // the FrameResult per frame that replay and serve keep for the report
+  std::size_t dem_cells = 0;
+  std::size_t octomap_leaves = 0;
+  double rest_mb() const { return rss_mb - dem_mb - octomap_mb - results_mb; }
+};
+
+MemorySplit SplitMemory(const mapper::Mapper& mapper) {
+  constexpr double kMb = 1048576.0;
+  MemorySplit m;
+  m.frames = mapper.results().size();
+  m.dem_mb = static_cast<double>(mapper.elevation_map().MemoryBytes()) / kMb;
+  m.dem_cells = mapper.elevation_map().CellCount();
+  if (const octomap::OcTree* tree = mapper.octomap().tree()) {
+    m.octomap_mb = static_cast<double>(tree->memoryUsage()) / kMb;
+    m.octomap_leaves = tree->getNumLeafNodes();
+  }
+  m.results_mb =
+      static_cast<double>(mapper.results().capacity() * sizeof(mapper::FrameResult)) / kMb;
+  m.rss_mb = RssMb();
+  return m;
+}
+
+// Replays `sequence` as replay does (read, then ProcessFrame), timing every frame; `splits`,
+// when given, gets the memory split after frame `split_after` and at the end.
 std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptions& options,
-                           double* wall_ms) {
+                           double* wall_ms, std::vector<MemorySplit>* splits = nullptr,
+                           std::size_t split_after = 0) {
   io::SequenceReader reader(sequence);
   mapper::Mapper mapper(reader.info(), options);
   std::vector<FrameCost> costs;
@@ -61,8 +92,10 @@ std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptio
     const double load_ms = MsSince(t0);
     const mapper::FrameResult r = mapper.ProcessFrame(frame, load_ms);
     costs.push_back({MsSince(t0), RssMb(), r.time});
+    if (splits != nullptr && costs.size() == split_after) splits->push_back(SplitMemory(mapper));
   }
   *wall_ms = MsSince(start);
+  if (splits != nullptr) splits->push_back(SplitMemory(mapper));
   return costs;
 }
 
@@ -103,28 +136,36 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
-      if (arg == "--frames") frames = std::stoi(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--long") long_frames = std::stoi(bench::OptionValue(argc, argv, &i));
-      else if (arg == "--kitti") kitti = bench::OptionValue(argc, argv, &i);
-      else if (arg == "--no-octomap") octomap = false;
-      else throw std::invalid_argument("unknown option " + arg);
+      if (arg == "--frames")
+        frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--long")
+        long_frames = std::stoi(bench::OptionValue(argc, argv, &i));
+      else if (arg == "--kitti")
+        kitti = bench::OptionValue(argc, argv, &i);
+      else if (arg == "--no-octomap")
+        octomap = false;
+      else
+        throw std::invalid_argument("unknown option " + arg);
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_replay: %s\nusage: bench_replay [--frames N] [--long N] "
-                         "[--kitti DIR] [--no-octomap]\n", e.what());
+    std::fprintf(stderr,
+                 "bench_replay: %s\nusage: bench_replay [--frames N] [--long N] "
+                 "[--kitti DIR] [--no-octomap]\n",
+                 e.what());
     return 2;
   }
   const config::Config defaults;
   mapper::PipelineOptions options{defaults.mapper, defaults.registration, defaults.stereo,
                                   defaults.dem, defaults.octomap};
   options.octomap.enabled = octomap;
-  const fs::path scratch = fs::temp_directory_path() / ("rovermap_bench_replay." +
-                                                        std::to_string(getpid()));
+  const fs::path scratch =
+      fs::temp_directory_path() / ("rovermap_bench_replay." + std::to_string(getpid()));
   fs::create_directories(scratch);
   std::printf("# bench_replay: defaults, OctoMap %s; load average %s\n", octomap ? "on" : "off",
               bench::LoadAverage().c_str());
-  std::printf("# per-frame medians [ms], frame 0 excluded; fps = frames / wall time (reading "
-              "included)\n");
+  std::printf(
+      "# per-frame medians [ms], frame 0 excluded; fps = frames / wall time (reading "
+      "included)\n");
   std::printf("%-34s %6s %7s %7s %7s %7s %8s %7s %8s %8s\n", "sequence", "frames", "fps", "load",
               "stereo", "prep", "register", "dem", "octomap", "frame");
 
@@ -150,7 +191,9 @@ int main(int argc, char** argv) {
   longer.frames = long_frames;
   longer.path = sim::PathShape::kLoop;
   longer.terrain_size_m = 60.0;
-  costs = Run(Simulate(scratch / "long", longer), options, &wall);
+  std::vector<MemorySplit> splits;
+  costs = Run(Simulate(scratch / "long", longer), options, &wall, &splits,
+              std::max<std::size_t>(1, static_cast<std::size_t>(long_frames) / 10));
   PrintRow("sim cloud, " + std::to_string(long_frames) + " frames (loop)", costs, wall);
   const std::size_t n = costs.size(), tenth = std::max<std::size_t>(1, n / 10);
   const auto frame_ms = [](const FrameCost& f) { return f.total_ms; };
@@ -168,6 +211,18 @@ int main(int argc, char** argv) {
   stage("  hand to the OctoMap [ms]", &mapper::StageTimes::fuse_octomap_ms);
   std::printf("%-34s %12.1f %12.1f\n", "resident memory [MB], at the end", costs[tenth - 1].rss_mb,
               costs.back().rss_mb);
+  if (splits.size() == 2) {
+    const MemorySplit& a = splits[0];
+    const MemorySplit& b = splits[1];
+    std::printf("\n%-34s %12zu %12zu\n", "memory after frame", a.frames, b.frames);
+    std::printf("%-34s %12.1f %12.1f\n", "resident [MB]", a.rss_mb, b.rss_mb);
+    std::printf("%-34s %12.1f %12.1f\n", "  DEM tiles [MB]", a.dem_mb, b.dem_mb);
+    std::printf("%-34s %12.1f %12.1f\n", "  OcTree nodes [MB]", a.octomap_mb, b.octomap_mb);
+    std::printf("%-34s %12.1f %12.1f\n", "  per-frame results [MB]", a.results_mb, b.results_mb);
+    std::printf("%-34s %12.1f %12.1f\n", "  the rest [MB]", a.rest_mb(), b.rest_mb());
+    std::printf("%-34s %12zu %12zu\n", "DEM cells reached", a.dem_cells, b.dem_cells);
+    std::printf("%-34s %12zu %12zu\n", "OcTree leaves", a.octomap_leaves, b.octomap_leaves);
+  }
   std::printf("# load average after: %s\n", bench::LoadAverage().c_str());
   fs::remove_all(scratch);
   return 0;
