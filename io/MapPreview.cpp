@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
+#include <vector>
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
@@ -103,8 +104,7 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   const int w = static_cast<int>((cols_cells + step - 1) / step);
   const int h = static_cast<int>((rows_cells + step - 1) / step);
   cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  float z_min = std::numeric_limits<float>::infinity();
-  float z_max = -z_min;
+  std::vector<float> heights;  // of the decimated pixels, for the colour range
   for (int r = 0; r < layers.height; ++r) {
     const std::int64_t cy = layers.max.y - r;
     const int row = static_cast<int>((hi.y - cy) / step);
@@ -115,10 +115,28 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
       const int col = static_cast<int>((layers.min.x + c - lo.x) / step);
       float& px = height.at<float>(row, col);
       px = std::isnan(px) ? z : std::max(px, z);
-      z_min = std::min(z_min, z);
-      z_max = std::max(z_max, z);
     }
   }
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      if (const float z = height.at<float>(r, c); !std::isnan(z)) heights.push_back(z);
+    }
+  }
+  // The colour range spans the heights between two quantiles, not the extremes: a few wrong
+  // cells (a spike at a crater rim) would otherwise squeeze the whole map into a few colours.
+  // Heights beyond take the end colours; the colour bar says so.
+  const auto quantile = [&heights](double q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(heights.size() - 1));
+    std::nth_element(heights.begin(), heights.begin() + k, heights.end());
+    return heights[static_cast<std::size_t>(k)];
+  };
+  const float z_lowest = *std::min_element(heights.begin(), heights.end());
+  const float z_highest = *std::max_element(heights.begin(), heights.end());
+  const double q = std::clamp(options.colour_quantile, 0.0, 0.49);
+  float z_min = quantile(q);
+  float z_max = quantile(1.0 - q);
+  const bool clipped_low = z_lowest < z_min;
+  const bool clipped_high = z_highest > z_max;
   const double pixel_m = layers.cell_size_m * static_cast<double>(step);
   if (!(z_max > z_min)) z_max = z_min + 1.0f;
 
@@ -131,7 +149,9 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
     for (int c = 0; c < w; ++c) {
       const float z = height.at<float>(r, c);
       normalized.at<unsigned char>(r, c) =
-          std::isnan(z) ? 0 : static_cast<unsigned char>(255.0f * (z - z_min) / (z_max - z_min));
+          std::isnan(z) ? 0
+                        : static_cast<unsigned char>(
+                              255.0f * std::clamp((z - z_min) / (z_max - z_min), 0.0f, 1.0f));
     }
   }
   cv::Mat colour;
@@ -225,6 +245,15 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   }
   cv::putText(canvas, "m", {bar_x, bar_top + bar_h + 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
               cv::LINE_AA);
+  // Heights beyond the bar's range: the extreme, at the end it is clipped to.
+  if (clipped_high) {
+    cv::putText(canvas, "max " + Format(z_highest, tick), {bar_x - 4, bar_top - 6},
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
+  }
+  if (clipped_low) {
+    cv::putText(canvas, "min " + Format(z_lowest, tick), {bar_x - 4, bar_top + bar_h + 30},
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
+  }
 
   const double bar_m = NiceBelow(map_image.cols / px_per_m / 4.0);
   const int bar_px = static_cast<int>(std::lround(bar_m * px_per_m));

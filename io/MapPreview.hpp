@@ -20,6 +20,9 @@ struct MapPreviewOptions {
   double sun_azimuth_deg = 315.0;   ///< [deg] clockwise from grid north (GIS default: north-west)
   double sun_elevation_deg = 45.0;  ///< [deg] above the horizon
   double hillshade_weight = 0.5;    ///< [ratio] 0 = colour only, 1 = shade only
+  /// [ratio] the colour range runs from this quantile of the heights to 1 minus it (0 = the
+  /// extremes), so that a few wrong cells do not set it; in [0, 0.5)
+  double colour_quantile = 0.005;
 };
 
 /// A path to draw on the map, with its legend label and colour.

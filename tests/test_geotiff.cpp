@@ -343,5 +343,38 @@ TEST(MapPreview, AWidePathDrawnFirstShowsAroundTheNarrowOneOverIt) {
   EXPECT_GT(shown, 10 * hidden) << hidden << " " << shown;  // measured: 95 and 1495
 }
 
+// A few wrong cells must not set the colour range: a 1 m ramp with three 10 m spikes still
+// spans the colour map (its top end red), and the bar names the clipped maximum.
+TEST(MapPreview, AFewSpikesDoNotSetTheColourRange) {
+  const Georeference georef({47.3, 17.8, 400.0});
+  const auto ramp_with_spikes = [](double x, double y) {
+    for (const auto& [sx, sy] : {std::pair{-5.0, -5.0}, {0.0, 3.0}, {6.0, -2.0}}) {
+      if (std::abs(x - sx) < 0.15 && std::abs(y - sy) < 0.15) return 10.0;
+    }
+    return (x + 10.0) / 20.0;
+  };
+  const dem::ElevationMap map = FillBox(georef, 0.1, -10.0, 10.0, -10.0, 10.0, ramp_with_spikes);
+  const auto red_pixels = [&](double quantile) {
+    MapPreviewOptions options;
+    options.colour_quantile = quantile;
+    const fs::path file = TempDir("spikes") / "dem.png";
+    WriteDemPreview(file, map, std::vector<PreviewTrajectory>{}, options);
+    const cv::Mat image = cv::imread(file.string());
+    // In the map (20 px margin, 201 cells drawn 2 px each), not the colour bar beside it.
+    EXPECT_GE(std::min(image.rows, image.cols), 20 + 402);
+    int n = 0;
+    for (int r = 20; r < std::min(image.rows, 20 + 402); ++r) {
+      for (int c = 20; c < std::min(image.cols, 20 + 402); ++c) {
+        const cv::Vec3b p = image.at<cv::Vec3b>(r, c);  // BGR: turbo's upper end
+        n += p[2] > 150 && p[1] < 140 && p[0] < 80 ? 1 : 0;
+      }
+    }
+    return n;
+  };
+  const int extremes = red_pixels(0.0);  // the spikes alone reach the top colours
+  const int quantiles = red_pixels(MapPreviewOptions{}.colour_quantile);
+  EXPECT_GT(quantiles, 20 * std::max(extremes, 1)) << extremes << " " << quantiles;  // 0, 36604
+}
+
 }  // namespace
 }  // namespace rovermap::io
