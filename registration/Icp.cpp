@@ -90,13 +90,13 @@ double MedianSpread(const IndexedCloud& source, const std::vector<std::size_t>& 
 // `hints` holds, per point of `from`, its previous closest point in `to` (warm start for the
 // bounded search, updated here); the result does not depend on it. With `need_orientations`
 // the matched `to` points' orientations are made available (the queried `from` points' must
-// already be, for the orientation test).
-void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
-                    const Eigen::Isometry3d& T_to_from, double dmax,
-                    const OrientationTest& orientation_test,
-                    const std::vector<std::size_t>& queries, std::size_t step, bool backward,
-                    bool need_orientations, std::vector<std::size_t>* hints,
-                    std::vector<Match>* out) {
+// already be, for the orientation test). Returns how many pairs the orientation test rejected.
+std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
+                           const Eigen::Isometry3d& T_to_from, double dmax,
+                           const OrientationTest& orientation_test,
+                           const std::vector<std::size_t>& queries, std::size_t step, bool backward,
+                           bool need_orientations, std::vector<std::size_t>* hints,
+                           std::vector<Match>* out) {
   const auto& pts = from.cloud().points;
   const long count = static_cast<long>((queries.size() + step - 1) / step);
   std::vector<Match> local(static_cast<std::size_t>(count));
@@ -124,15 +124,27 @@ void MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
     to.RequireOrientations(matched);
   }
   const Eigen::Matrix3d rotation = T_to_from.linear();
+  std::size_t rejected = 0;
   for (Match m : local) {
     if (orientation_test.enabled &&
         !orientation_test.Consistent(
             rotation * from.orientation(m.source_index), to.orientation(m.target_index),
-            from.orientation_spread(m.source_index), to.orientation_spread(m.target_index)))
+            from.orientation_spread(m.source_index), to.orientation_spread(m.target_index))) {
+      ++rejected;
       continue;
+    }
     if (backward) std::swap(m.source_index, m.target_index);
     out->push_back(m);
   }
+  return rejected;
+}
+
+// Every `step`-th of `indices`: the points a coarse iteration queries.
+std::vector<std::size_t> EveryKth(const std::vector<std::size_t>& indices, std::size_t step) {
+  std::vector<std::size_t> kept;
+  kept.reserve((indices.size() + step - 1) / step);
+  for (std::size_t k = 0; k < indices.size(); k += step) kept.push_back(indices[k]);
+  return kept;
 }
 
 // Combined covariance of a pair's residual, R Λx Rᵀ + Λy (§4.4), plus an isotropic
@@ -460,11 +472,27 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
                 : std::vector<std::size_t>();
   result.sample_points = source_sample.size();
   const bool need_orientations = NeedsOrientations(options);
-  if (orientation_test.enabled) {
-    source.RequireOrientations(source_sample);
-    target.RequireOrientations(target_sample);
-    orientation_test.spread_cap = MedianSpread(source, source_sample, target, target_sample);
-  }
+  // The orientation test needs the queried points' own orientations. With coarse to fine it
+  // is first run on the coarse subset only, and kept for the fine stage only if it rejected
+  // enough of the coarse pairs (`orientation_min_rejected`): on clean scans it removes next
+  // to nothing, and the source normals of the whole sample were most of its cost.
+  // Coarse to fine (§4.5) pays where queries are many; a coarse subset of a few dozen points
+  // (a 200-point curve: 20) makes a poor estimate and saves nothing.
+  constexpr std::size_t kMinCoarseQueries = 500;
+  const bool use_coarse =
+      options.coarse_to_fine && options.coarse_iterations > 0 && options.coarse_step > 1 &&
+      source_sample.size() / static_cast<std::size_t>(options.coarse_step) >= kMinCoarseQueries;
+  const bool staged_test = orientation_test.enabled && use_coarse;
+  auto require_queried = [&](std::size_t step) {
+    const std::vector<std::size_t> s = step > 1 ? EveryKth(source_sample, step) : source_sample;
+    const std::vector<std::size_t> t = step > 1 ? EveryKth(target_sample, step) : target_sample;
+    source.RequireOrientations(s);
+    target.RequireOrientations(t);
+    orientation_test.spread_cap = MedianSpread(source, s, target, t);
+  };
+  if (orientation_test.enabled)
+    require_queried(staged_test ? static_cast<std::size_t>(options.coarse_step) : 1);
+  double coarse_rejected_fraction = 0.0;  // of the pairs found, in the last coarse iteration
 
   Eigen::Isometry3d T = T_init;
   constexpr std::size_t kNoHint = std::numeric_limits<std::size_t>::max();
@@ -489,24 +517,34 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   constexpr std::size_t kCycleMemory = 8;  // iterates a cycle may span (see the stopping test)
   std::vector<Eigen::Isometry3d> recent;
   for (int it = 1; it <= options.max_iterations; ++it) {
-    const bool coarse = options.coarse_to_fine && it <= options.coarse_iterations;
+    const bool coarse = use_coarse && it <= options.coarse_iterations;
     const std::size_t step = coarse ? static_cast<std::size_t>(options.coarse_step) : 1;
     if (step != previous_step) {
       // A new query set is a new objective: no history, no unverified extrapolation.
       anderson.Reset();
       if (extrapolated) T = T_plain;
       extrapolated = false;
+      if (staged_test && !coarse && orientation_test.enabled) {
+        if (coarse_rejected_fraction < options.orientation_min_rejected) {
+          orientation_test.enabled = false;
+        } else {
+          require_queried(1);
+        }
+      }
     }
 
     // a. Closest points within Dmax, both ways for the symmetric criterion.
+    std::size_t orientation_rejected = 0;
     auto match = [&] {
       matches.clear();
-      MatchDirection(source, target, T, dmax, orientation_test, source_sample, step, false,
-                     need_orientations, &forward_hints, &matches);
+      orientation_rejected =
+          MatchDirection(source, target, T, dmax, orientation_test, source_sample, step, false,
+                         need_orientations, &forward_hints, &matches);
       std::size_t n = (source_sample.size() + step - 1) / step;
       if (symmetric) {
-        MatchDirection(target, source, T.inverse(), dmax, orientation_test, target_sample, step,
-                       true, need_orientations, &backward_hints, &matches);
+        orientation_rejected +=
+            MatchDirection(target, source, T.inverse(), dmax, orientation_test, target_sample, step,
+                           true, need_orientations, &backward_hints, &matches);
         n += (target_sample.size() + step - 1) / step;
       }
       distances.clear();
@@ -561,6 +599,11 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     trace.iteration = it;
     trace.queries = rejected ? 2 * queries : queries;  // a rejected extrapolation matched twice
     trace.pairs_found = distances.size();
+    trace.pairs_rejected_by_orientation = orientation_rejected;
+    if (coarse)
+      coarse_rejected_fraction =
+          static_cast<double>(orientation_rejected) /
+          static_cast<double>(std::max<std::size_t>(1, orientation_rejected + distances.size()));
     trace.pairs_kept = kept;
     trace.mean_m = update.mean_m;
     trace.stddev_m = update.stddev_m;

@@ -78,9 +78,10 @@ struct IterationTrace {
   std::size_t queries = 0;      ///< closest-point queries (sampled points used, both ways)
   std::size_t pairs_found = 0;  ///< pairs within the previous Dmax (and orientation test)
   std::size_t pairs_kept = 0;   ///< pairs after the new Dmax or the Mahalanobis gate
-  double mean_m = 0.0;          ///< μ of the found pairs' distances
-  double stddev_m = 0.0;        ///< σ
-  double dmax_m = 0.0;          ///< Dmax after the update
+  std::size_t pairs_rejected_by_orientation = 0;  ///< within Dmax, failed the orientation test
+  double mean_m = 0.0;                            ///< μ of the found pairs' distances
+  double stddev_m = 0.0;                          ///< σ
+  double dmax_m = 0.0;                            ///< Dmax after the update
   DmaxBranch branch = DmaxBranch::kNoPairs;
   double rms_m = 0.0;  ///< RMS distance of the kept pairs before the motion update
   double step_translation_m = 0.0;

@@ -66,6 +66,11 @@ struct RegistrationOptions {
   /// fitted to (CloudGeometry: NormalSpread, EstimateTangents) [count of σ]; 0 = the plain
   /// test (the paper). Noisy tangents otherwise reject good pairs at random.
   double orientation_spread_sigmas = 1.5;
+  /// With coarse_to_fine, the orientation test runs on the coarse subset first and is kept
+  /// for the fine stage only if it rejected at least this fraction of the pairs found in the
+  /// last coarse iteration [ratio]; 0 = always kept. Clean scans then need source
+  /// orientations for the coarse subset only.
+  double orientation_min_rejected = 0.006;
   /// Neighbours used for PCA surface normals when the cloud has none [count].
   int normal_neighbors = 10;
 
@@ -77,9 +82,10 @@ struct RegistrationOptions {
   /// order (every k-th) [count]; 0 = no limit.
   int max_sample_points = 15000;
 
-  /// Coarse to fine (on top of the voxel sample): the first `coarse_iterations` use every
-  /// `coarse_step`-th source point.
-  bool coarse_to_fine = false;
+  /// Coarse to fine (on top of the voxel sample, Zhang 1994 §4.5): the first
+  /// `coarse_iterations` use every `coarse_step`-th source point; skipped when that subset
+  /// would have fewer than 500 points (nothing to save, and too few for a good estimate).
+  bool coarse_to_fine = true;
   int coarse_iterations = 5;
   int coarse_step = 10;
 
