@@ -80,9 +80,11 @@ std::vector<KeyEntry> BuildRegistry() {
              "Theta: max normal/tangent angle; 0 = off");
   reg.Double("orientation_spread_sigmas", &R::orientation_spread_sigmas, "sigma", AtLeast(0),
              "Theta widened by this many expected orientation errors; 0 = plain test");
-  reg.Double(
-      "orientation_min_rejected", &R::orientation_min_rejected, "ratio", Bounds{0, false, 1, false},
-      "coarse to fine: keep the test for the fine stage if it rejected this much; 0 = always");
+  reg.Bool("staged_orientation_test", &R::staged_orientation_test,
+           "PCA-normal sources: test on the coarse subset first, keep it if it rejects pairs");
+  reg.Double("orientation_min_rejected", &R::orientation_min_rejected, "ratio",
+             Bounds{0, false, 1, false},
+             "staged test: kept for the fine stage if it rejected this much; 0 = always");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),
           "PCA normal neighbours if the cloud has none");
   reg.Double("sample_voxel_factor", &R::sample_voxel_factor, "x D", AtLeast(0),

@@ -35,6 +35,8 @@ class IndexedCloud {
   const KdTree& tree() const;
   /// Whether this cloud carries orientations (given, tangents or on-demand normals).
   bool HasOrientations() const { return !orientations_.empty(); }
+  /// Whether its orientations are PCA normals estimated on demand (they cost a k-NN each).
+  bool EstimatesOrientations() const { return !known_.empty(); }
   /// Makes the orientations of `indices` available (estimates the missing normals in
   /// parallel). Safe to call from several threads; each index is estimated once.
   void RequireOrientations(const std::vector<std::size_t>& indices) const;

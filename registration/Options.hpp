@@ -66,10 +66,15 @@ struct RegistrationOptions {
   /// fitted to (CloudGeometry: NormalSpread, EstimateTangents) [count of σ]; 0 = the plain
   /// test (the paper). Noisy tangents otherwise reject good pairs at random.
   double orientation_spread_sigmas = 1.5;
-  /// With coarse_to_fine, the orientation test runs on the coarse subset first and is kept
-  /// for the fine stage only if it rejected at least this fraction of the pairs found in the
-  /// last coarse iteration [ratio]; 0 = always kept. Clean scans then need source
-  /// orientations for the coarse subset only.
+  /// The staged orientation test (issue 12): when the source's orientations must be estimated
+  /// (PCA normals: no normals given), the first `coarse_iterations` run on the coarse subset
+  /// (every `coarse_step`-th sampled point) as with coarse_to_fine, and the test is kept for
+  /// the fine stage only if it rejected at least `orientation_min_rejected` of the pairs found
+  /// in the last coarse iteration. Clean scans then need source normals for the coarse subset
+  /// only. Sources with given normals (stereo) are left as they were. With coarse_to_fine the
+  /// test is staged the same way whatever the normals.
+  bool staged_orientation_test = true;
+  /// [ratio]; 0 = the staged test is always kept.
   double orientation_min_rejected = 0.006;
   /// Neighbours used for PCA surface normals when the cloud has none [count].
   int normal_neighbors = 10;
@@ -85,7 +90,7 @@ struct RegistrationOptions {
   /// Coarse to fine (on top of the voxel sample, Zhang 1994 §4.5): the first
   /// `coarse_iterations` use every `coarse_step`-th source point; skipped when that subset
   /// would have fewer than 500 points (nothing to save, and too few for a good estimate).
-  bool coarse_to_fine = true;
+  bool coarse_to_fine = false;
   int coarse_iterations = 5;
   int coarse_step = 10;
 

@@ -250,7 +250,7 @@ TEST(Icp, CoarseToFineSavesQueries) {
   const ScenePair p = MakeTerrainPair(Terrain(6));
   const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
   RegistrationOptions o;
-  o.coarse_to_fine = false;
+  o.staged_orientation_test = false;  // it would bring a coarse stage of its own
   const RegistrationResult fine = Register(p.source, p.target, init, o);
   o.coarse_to_fine = true;
   const RegistrationResult c2f = Register(p.source, p.target, init, o);
@@ -314,7 +314,7 @@ TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
     const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
     RegistrationOptions o = PointToPointOnEveryPoint();
     o.max_iterations = 1000;
-    o.coarse_to_fine = false;  // one objective throughout: the fixed point is well defined
+    o.staged_orientation_test = false;  // one objective throughout: a well-defined fixed point
     // The fixed point: plain iteration with tolerances far below the noise.
     o.acceleration = Acceleration::kNone;
     o.rotation_tolerance_deg = 1e-6;
@@ -438,7 +438,7 @@ TEST(Icp, VoxelSampleIsUsedAndReported) {
   const ScenePair p = MakeTerrainPair(Terrain(9));
   const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
   RegistrationOptions o;
-  o.coarse_to_fine = false;  // every iteration queries the whole sample
+  o.staged_orientation_test = false;  // every iteration queries the whole sample
   o.sample_voxel_factor = 0.0;
   const RegistrationResult all = Register(p.source, p.target, init, o);
   EXPECT_EQ(all.sample_points, p.source.size());
