@@ -207,7 +207,7 @@ static void ValidateCombinations(const Config& config) {
       r.residual == registration::Residual::kPointToPlane) {
     throw ConfigError(
         "registration.residual: point_to_plane needs surface normals; with geometry: curve set "
-        "registration.residual=point_to_point");
+        "registration.residual=auto or point_to_point");
   }
   const auto& st = config.stereo;
   if (st.num_disparities % 16 != 0) {

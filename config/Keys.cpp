@@ -23,7 +23,8 @@ const EnumNames<Criterion> kCriterionNames = {{"nonsymmetric", Criterion::kNonSy
                                               {"symmetric", Criterion::kSymmetric}};
 const EnumNames<Solver> kSolverNames = {{"svd", Solver::kSvd},
                                         {"dual_quaternion", Solver::kDualQuaternion}};
-const EnumNames<Residual> kResidualNames = {{"point_to_point", Residual::kPointToPoint},
+const EnumNames<Residual> kResidualNames = {{"auto", Residual::kAuto},
+                                            {"point_to_point", Residual::kPointToPoint},
                                             {"point_to_plane", Residual::kPointToPlane}};
 const EnumNames<Convergence> kConvergenceNames = {{"absolute", Convergence::kAbsolute},
                                                   {"relative", Convergence::kRelative}};
@@ -53,7 +54,8 @@ std::vector<KeyEntry> BuildRegistry() {
   reg.Enum("geometry", &R::geometry, kGeometryNames, "what the points sample (Zhang 1994, 4.2)");
   reg.Enum("criterion", &R::criterion, kCriterionNames, "symmetric: also target -> source");
   reg.Enum("solver", &R::solver, kSolverNames, "closed-form motion (Zhang 1994, App. A/B)");
-  reg.Enum("residual", &R::residual, kResidualNames, "point_to_plane needs normals");
+  reg.Enum("residual", &R::residual, kResidualNames,
+           "auto: point_to_plane for surfaces, point_to_point for curves");
   reg.Double("reference_distance", &R::reference_distance_m, "m", AtLeast(0),
              "Zhang's D; 0 = from the point spacing");
   reg.Double("dmax_initial_factor", &R::dmax_initial_factor, "factor", GreaterThan(0),
@@ -76,6 +78,13 @@ std::vector<KeyEntry> BuildRegistry() {
           "past steps Anderson combines");
   reg.Double("orientation_threshold_deg", &R::orientation_threshold_deg, "deg", ClosedOpen(0, 180),
              "Theta: max normal/tangent angle; 0 = off");
+  reg.Double("orientation_spread_sigmas", &R::orientation_spread_sigmas, "sigma", AtLeast(0),
+             "Theta widened by this many expected orientation errors; 0 = plain test");
+  reg.Bool("staged_orientation_test", &R::staged_orientation_test,
+           "PCA-normal sources: test on the coarse subset first, keep it if it rejects pairs");
+  reg.Double("orientation_min_rejected", &R::orientation_min_rejected, "ratio",
+             Bounds{0, false, 1, false},
+             "staged test: kept for the fine stage if it rejected this much; 0 = always");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),
           "PCA normal neighbours if the cloud has none");
   reg.Double("sample_voxel_factor", &R::sample_voxel_factor, "x D", AtLeast(0),

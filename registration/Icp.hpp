@@ -35,11 +35,16 @@ class IndexedCloud {
   const KdTree& tree() const;
   /// Whether this cloud carries orientations (given, tangents or on-demand normals).
   bool HasOrientations() const { return !orientations_.empty(); }
+  /// Whether its orientations are PCA normals estimated on demand (they cost a k-NN each).
+  bool EstimatesOrientations() const { return !known_.empty(); }
   /// Makes the orientations of `indices` available (estimates the missing normals in
   /// parallel). Safe to call from several threads; each index is estimated once.
   void RequireOrientations(const std::vector<std::size_t>& indices) const;
   /// Unit orientation of point i (zero vector = unknown). Valid once i has been required.
   const Eigen::Vector3d& orientation(std::size_t i) const { return orientations_[i]; }
+  /// Expected angular error of orientation(i) [rad] from the scatter of the neighbours it was
+  /// fitted to; 0 for given normals (trusted). Valid once i has been required.
+  double orientation_spread(std::size_t i) const { return spreads_.empty() ? 0.0 : spreads_[i]; }
   /// Median nearest-neighbour spacing [m], computed on first use (only needed for D = 0).
   double spacing() const;
 
@@ -51,6 +56,7 @@ class IndexedCloud {
   // Entries are written once, under the mutex, before `known_` says so; a thread reads only
   // entries it has required, so reads never race with the writes.
   mutable std::vector<Eigen::Vector3d> orientations_;
+  mutable std::vector<double> spreads_;       // empty: all 0 (given normals)
   mutable std::vector<unsigned char> known_;  // empty: all known
   mutable std::mutex orientation_mutex_;
   mutable std::once_flag spacing_once_;
@@ -71,14 +77,15 @@ const char* ToString(RegistrationStatus status);
 /// One iteration of the loop (Zhang 1994, §4.3 step 3).
 struct IterationTrace {
   int iteration = 0;
-  std::size_t queries = 0;       ///< closest-point queries (sampled points used, both ways)
-  std::size_t pairs_found = 0;   ///< pairs within the previous Dmax (and orientation test)
-  std::size_t pairs_kept = 0;    ///< pairs after the new Dmax or the Mahalanobis gate
-  double mean_m = 0.0;           ///< μ of the found pairs' distances
-  double stddev_m = 0.0;         ///< σ
-  double dmax_m = 0.0;           ///< Dmax after the update
+  std::size_t queries = 0;      ///< closest-point queries (sampled points used, both ways)
+  std::size_t pairs_found = 0;  ///< pairs within the previous Dmax (and orientation test)
+  std::size_t pairs_kept = 0;   ///< pairs after the new Dmax or the Mahalanobis gate
+  std::size_t pairs_rejected_by_orientation = 0;  ///< within Dmax, failed the orientation test
+  double mean_m = 0.0;                            ///< μ of the found pairs' distances
+  double stddev_m = 0.0;                          ///< σ
+  double dmax_m = 0.0;                            ///< Dmax after the update
   DmaxBranch branch = DmaxBranch::kNoPairs;
-  double rms_m = 0.0;            ///< RMS distance of the kept pairs before the motion update
+  double rms_m = 0.0;  ///< RMS distance of the kept pairs before the motion update
   double step_translation_m = 0.0;
   double step_rotation_deg = 0.0;
   bool accelerated = false;             ///< matched at an (accepted) Anderson extrapolation
@@ -90,11 +97,11 @@ struct RegistrationResult {
   bool converged = false;
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   int iterations = 0;
-  std::size_t sample_points = 0;    ///< source points matched (voxel sample, see Options)
-  std::size_t inliers = 0;          ///< sampled points paired within the final Dmax / gate
-  double inlier_ratio = 0.0;        ///< inliers / sample_points: low means little overlap found
-  double rms_m = 0.0;               ///< RMS distance of those pairs [m]
-  double dmax_m = 0.0;              ///< final Dmax [m]
+  std::size_t sample_points = 0;      ///< source points matched (voxel sample, see Options)
+  std::size_t inliers = 0;            ///< sampled points paired within the final Dmax / gate
+  double inlier_ratio = 0.0;          ///< inliers / sample_points: low means little overlap found
+  double rms_m = 0.0;                 ///< RMS distance of those pairs [m]
+  double dmax_m = 0.0;                ///< final Dmax [m]
   double reference_distance_m = 0.0;  ///< D as used (given or derived) [m]
   /// Information and covariance of the estimate for a left perturbation
   /// T = Exp([δr, δt]) T̂ in the target frame, order [rx ry rz (rad), tx ty tz (m)].

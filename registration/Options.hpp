@@ -11,7 +11,9 @@ enum class Criterion { kNonSymmetric, kSymmetric };
 enum class Solver { kSvd, kDualQuaternion };
 /// Residual minimised each iteration. Point-to-point is the paper; point-to-plane
 /// (linearised, needs target normals) slides along smooth terrain much faster.
-enum class Residual { kPointToPoint, kPointToPlane };
+/// kAuto follows the geometry: point-to-plane for surfaces, point-to-point for curves
+/// (a curve has no normal to project on); see EffectiveResidual.
+enum class Residual { kAuto, kPointToPoint, kPointToPlane };
 /// Stopping test. kRelative is the paper's 1 % test on r and t; kAbsolute stops when
 /// the step is below fixed tolerances in metres and degrees (see ALGORITHM.md,
 /// "Known weakness").
@@ -29,7 +31,7 @@ struct RegistrationOptions {
   Geometry geometry = Geometry::kSurface;
   Criterion criterion = Criterion::kNonSymmetric;
   Solver solver = Solver::kSvd;
-  Residual residual = Residual::kPointToPlane;
+  Residual residual = Residual::kAuto;
 
   /// Zhang's D: the distance at which registration counts as good [m].
   /// 0 = derive from the data (median nearest-neighbour spacing of the target).
@@ -58,6 +60,22 @@ struct RegistrationOptions {
   /// Θ: reject pairs whose normals (surfaces) or tangents (curves) differ by more
   /// than this angle [deg]; 0 = off. Signs are ignored (|cos|).
   double orientation_threshold_deg = 45.0;
+  /// How reliable each orientation is widens Θ for that pair: a pair is rejected only when
+  /// its angle exceeds Θ + this many times the pair's expected orientation error,
+  /// √2 · min(sa, sb), each s from the scatter of the neighbours the tangent or normal was
+  /// fitted to (CloudGeometry: NormalSpread, EstimateTangents) [count of σ]; 0 = the plain
+  /// test (the paper). Noisy tangents otherwise reject good pairs at random.
+  double orientation_spread_sigmas = 1.5;
+  /// The staged orientation test (issue 12): when the source's orientations must be estimated
+  /// (PCA normals: no normals given), the first `coarse_iterations` run on the coarse subset
+  /// (every `coarse_step`-th sampled point) as with coarse_to_fine, and the test is kept for
+  /// the fine stage only if it rejected at least `orientation_min_rejected` of the pairs found
+  /// in the last coarse iteration. Clean scans then need source normals for the coarse subset
+  /// only. Sources with given normals (stereo) are left as they were. With coarse_to_fine the
+  /// test is staged the same way whatever the normals.
+  bool staged_orientation_test = true;
+  /// [ratio]; 0 = the staged test is always kept.
+  double orientation_min_rejected = 0.006;
   /// Neighbours used for PCA surface normals when the cloud has none [count].
   int normal_neighbors = 10;
 
@@ -69,8 +87,9 @@ struct RegistrationOptions {
   /// order (every k-th) [count]; 0 = no limit.
   int max_sample_points = 15000;
 
-  /// Coarse to fine (on top of the voxel sample): the first `coarse_iterations` use every
-  /// `coarse_step`-th source point.
+  /// Coarse to fine (on top of the voxel sample, Zhang 1994 §4.5): the first
+  /// `coarse_iterations` use every `coarse_step`-th source point; skipped when that subset
+  /// would have fewer than 500 points (nothing to save, and too few for a good estimate).
   bool coarse_to_fine = false;
   int coarse_iterations = 5;
   int coarse_step = 10;
@@ -84,5 +103,12 @@ struct RegistrationOptions {
   /// Fewer pairs than this after gating ends the loop with a failure status [count].
   int min_pairs = 6;
 };
+
+/// The residual the matcher minimises: `residual`, or with kAuto the one the geometry
+/// supports (point-to-plane needs surface normals; curves have tangents only).
+inline Residual EffectiveResidual(const RegistrationOptions& options) {
+  if (options.residual != Residual::kAuto) return options.residual;
+  return options.geometry == Geometry::kCurve ? Residual::kPointToPoint : Residual::kPointToPlane;
+}
 
 }  // namespace rovermap::registration

@@ -330,6 +330,7 @@ TEST(LoadConfig, EnumsRoundTrip) {
   check("registration.criterion", "symmetric", Criterion::kSymmetric, &R::criterion);
   check("registration.solver", "svd", Solver::kSvd, &R::solver);
   check("registration.solver", "dual_quaternion", Solver::kDualQuaternion, &R::solver);
+  check("registration.residual", "auto", Residual::kAuto, &R::residual);
   check("registration.residual", "point_to_point", Residual::kPointToPoint, &R::residual);
   check("registration.residual", "point_to_plane", Residual::kPointToPlane, &R::residual);
   check("registration.convergence", "absolute", Convergence::kAbsolute, &R::convergence);
@@ -352,11 +353,27 @@ TEST(DumpYaml, LoadsBackToTheSameConfig) {
 // ---- errors --------------------------------------------------------------------------------
 
 TEST(ConfigErrors, CurveGeometryRejectsPointToPlane) {
-  EXPECT_EQ(OverrideError("registration.geometry=curve"),
+  EXPECT_EQ(ErrorOf([] {
+              LoadConfig(std::nullopt,
+                         {"registration.geometry=curve", "registration.residual=point_to_plane"});
+            }),
             "registration.residual: point_to_plane needs surface normals; with geometry: curve set "
-            "registration.residual=point_to_point");
+            "registration.residual=auto or point_to_point");
   EXPECT_NO_THROW(LoadConfig(
       std::nullopt, {"registration.geometry=curve", "registration.residual=point_to_point"}));
+}
+
+// The residual follows the geometry unless it is set: geometry=curve alone is accepted and
+// registers point to point; surfaces stay point to plane.
+TEST(LoadConfig, ResidualFollowsTheGeometryUnlessSet) {
+  using rovermap::registration::EffectiveResidual;
+  const Config curve = LoadConfig(std::nullopt, {"registration.geometry=curve"});
+  EXPECT_EQ(curve.registration.residual, Residual::kAuto);
+  EXPECT_EQ(EffectiveResidual(curve.registration), Residual::kPointToPoint);
+  const Config surface = LoadConfig(std::nullopt, {});
+  EXPECT_EQ(EffectiveResidual(surface.registration), Residual::kPointToPlane);
+  const Config explicit_p2p = LoadConfig(std::nullopt, {"registration.residual=point_to_point"});
+  EXPECT_EQ(EffectiveResidual(explicit_p2p.registration), Residual::kPointToPoint);
 }
 
 TEST(ConfigErrors, SubpixelWindowIsZeroOrOddAndAtLeastThree) {

@@ -11,7 +11,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <thread>
 
 #include "registration/CloudGeometry.hpp"
@@ -24,8 +23,8 @@ using rovermap::testing::MakeCurvePair;
 using rovermap::testing::MakeTerrainPair;
 using rovermap::testing::Perturb;
 using rovermap::testing::PoseError;
-using rovermap::testing::ScenePair;
 using rovermap::testing::SceneOptions;
+using rovermap::testing::ScenePair;
 
 namespace {
 
@@ -109,7 +108,8 @@ TEST(Icp, PaperPointToPointOnCurves) {
     const ScenePair p = Curves(1);
     RegistrationOptions o = CurveOptions();
     o.solver = solver;
-    const RegistrationResult r = Register(p.source, p.target, Perturb(p.T_target_source, 5.0, 0.05), o);
+    const RegistrationResult r =
+        Register(p.source, p.target, Perturb(p.T_target_source, 5.0, 0.05), o);
     const auto [rot, trans] = PoseError(r.T_target_source, p.T_target_source);
     EXPECT_TRUE(r.converged);
     EXPECT_LT(rot, 0.2);
@@ -225,11 +225,32 @@ TEST(Icp, OrientationTestSpeedsConvergence) {
   EXPECT_LT(error_on, error_off + 0.03);
 }
 
+// The staged orientation test: on terrain with 15 % outliers it still rejects pairs at the
+// end of the coarse stage (measured 1.3 % of the pairs found, above orientation_min_rejected),
+// so it stays on for the fine stage.
+TEST(Icp, OrientationTestIsKeptWhereItRejectsPairs) {
+  const ScenePair p = MakeTerrainPair(SceneOptions{});
+  const RegistrationOptions o;
+  const RegistrationResult r =
+      Register(p.source, p.target, Perturb(p.T_target_source, 2.0, 0.10), o);
+  ASSERT_GT(r.iterations, o.coarse_iterations);
+  std::size_t fine_rejected = 0;
+  for (const IterationTrace& t : r.trace)
+    if (t.iteration > o.coarse_iterations) fine_rejected += t.pairs_rejected_by_orientation;
+  EXPECT_GT(fine_rejected, 0u);
+  const IterationTrace& last_coarse = r.trace[static_cast<std::size_t>(o.coarse_iterations) - 1];
+  EXPECT_GT(
+      last_coarse.pairs_rejected_by_orientation,
+      o.orientation_min_rejected *
+          static_cast<double>(last_coarse.pairs_found + last_coarse.pairs_rejected_by_orientation));
+}
+
 // Coarse to fine (§4.5): the same accuracy for fewer closest-point queries.
 TEST(Icp, CoarseToFineSavesQueries) {
   const ScenePair p = MakeTerrainPair(Terrain(6));
   const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
   RegistrationOptions o;
+  o.staged_orientation_test = false;  // it would bring a coarse stage of its own
   const RegistrationResult fine = Register(p.source, p.target, init, o);
   o.coarse_to_fine = true;
   const RegistrationResult c2f = Register(p.source, p.target, init, o);
@@ -293,6 +314,7 @@ TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
     const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
     RegistrationOptions o = PointToPointOnEveryPoint();
     o.max_iterations = 1000;
+    o.staged_orientation_test = false;  // one objective throughout: a well-defined fixed point
     // The fixed point: plain iteration with tolerances far below the noise.
     o.acceleration = Acceleration::kNone;
     o.rotation_tolerance_deg = 1e-6;
@@ -341,7 +363,8 @@ TEST(Icp, CovarianceIsSymmetricPositiveDefiniteAndFlagsAPlane) {
   rovermap::registration::PointCloud plane;
   for (double x = 0; x < 2; x += 0.05)
     for (double y = 0; y < 2; y += 0.05) plane.points.emplace_back(x, y, 0.0);
-  const RegistrationResult flat = Register(plane, plane, Eigen::Isometry3d::Identity(), RegistrationOptions{});
+  const RegistrationResult flat =
+      Register(plane, plane, Eigen::Isometry3d::Identity(), RegistrationOptions{});
   EXPECT_LT(flat.conditioning, 1e-6);
   EXPECT_GT(r.conditioning, 1e-4);
 }
@@ -350,7 +373,8 @@ TEST(Icp, StatusReportsFailures) {
   PointCloud two;
   two.points = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0)};
   const ScenePair p = MakeTerrainPair(Terrain(8));
-  const RegistrationResult few = Register(two, p.target, Eigen::Isometry3d::Identity(), RegistrationOptions{});
+  const RegistrationResult few =
+      Register(two, p.target, Eigen::Isometry3d::Identity(), RegistrationOptions{});
   EXPECT_EQ(few.status, RegistrationStatus::kTooFewPoints);
   EXPECT_FALSE(few.converged);
   EXPECT_FALSE(few.message.empty());
@@ -404,7 +428,8 @@ TEST(Icp, OnDemandNormalsEqualTheEagerOnesAndAreComputedOnlyWhereNeeded) {
     });
   }
   for (auto& t : threads) t.join();
-  for (std::size_t i = 0; i < shared.cloud().size(); ++i) EXPECT_EQ(shared.orientation(i), eager[i]);
+  for (std::size_t i = 0; i < shared.cloud().size(); ++i)
+    EXPECT_EQ(shared.orientation(i), eager[i]);
 }
 
 // The voxel sample: its size is reported, 0 means every point, and a coarser sample still
@@ -413,6 +438,7 @@ TEST(Icp, VoxelSampleIsUsedAndReported) {
   const ScenePair p = MakeTerrainPair(Terrain(9));
   const Eigen::Isometry3d init = Perturb(p.T_target_source, 2.0, 0.10);
   RegistrationOptions o;
+  o.staged_orientation_test = false;  // every iteration queries the whole sample
   o.sample_voxel_factor = 0.0;
   const RegistrationResult all = Register(p.source, p.target, init, o);
   EXPECT_EQ(all.sample_points, p.source.size());

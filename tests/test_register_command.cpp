@@ -23,7 +23,8 @@ class RegisterCommand : public rovermap::testing::CommandFixture {
   std::string GoodXyz() {
     std::ostringstream s;
     for (int i = 0; i < 20; ++i)
-      for (int j = 0; j < 20; ++j) s << 0.1 * i << " " << 0.1 * j << " " << 0.05 * ((i * j) % 3) << "\n";
+      for (int j = 0; j < 20; ++j)
+        s << 0.1 * i << " " << 0.1 * j << " " << 0.05 * ((i * j) % 3) << "\n";
     return Write("good.xyz", s.str());
   }
 };
@@ -35,8 +36,9 @@ const std::string kBunny = std::string(ROVERMAP_DATASETS_DIR) + "/stanford_bunny
 TEST_F(RegisterCommand, BunnyPairPrintsTheJsonContract) {
   // Reference bun045 -> bun000 is a 34.3° rotation about y: start 5° and 3 mm off it.
   const std::string png = (dir_ / "preview.png").string();
-  const CommandResult r = Rovermap("register " + kBunny + "bun045.ply " + kBunny +
-                         "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" --preview " + png);
+  const CommandResult r =
+      Rovermap("register " + kBunny + "bun045.ply " + kBunny +
+               "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" --preview " + png);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   for (const char* key : {"matrix", "rotation_vector", "translation", "converged", "iterations",
@@ -59,9 +61,10 @@ TEST_F(RegisterCommand, BunnyPairPrintsTheJsonContract) {
 }
 
 TEST_F(RegisterCommand, FastPresetMatchesAVoxelSample) {
-  const CommandResult r = Rovermap(
-      "register " + kBunny + "bun045.ply " + kBunny + "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" "
-      "--config " + std::string(ROVERMAP_SOURCE_DIR) + "/config/presets/fast.yaml");
+  const CommandResult r = Rovermap("register " + kBunny + "bun045.ply " + kBunny +
+                                   "bun000.ply --init \"0 0.5111 0 -0.049 0 -0.011\" "
+                                   "--config " +
+                                   std::string(ROVERMAP_SOURCE_DIR) + "/config/presets/fast.yaml");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["converged"].get<bool>());
@@ -95,12 +98,30 @@ TEST_F(RegisterCommand, CurvesFromXyzChains) {
     target << "\n";
     source << "\n";
   }
-  const CommandResult r = Rovermap("register " + Write("s.xyz", source.str()) + " " + Write("t.xyz", target.str()) +
-                         " --set registration.geometry=curve --set registration.residual=point_to_point"
-                         " --set registration.orientation_threshold_deg=60");
+  const std::string files =
+      "register " + Write("s.xyz", source.str()) + " " + Write("t.xyz", target.str());
+  const CommandResult r = Rovermap(files +
+                                   " --set registration.geometry=curve --set "
+                                   "registration.residual=point_to_point"
+                                   " --set registration.orientation_threshold_deg=60");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_NEAR(j["translation"][0].get<double>(), 0.02, 1e-3);
+
+  // The residual follows the geometry: geometry=curve alone registers point to point.
+  const CommandResult alone = Rovermap(files + " --set registration.geometry=curve");
+  ASSERT_EQ(alone.status, 0) << alone.err;
+  const nlohmann::json a = nlohmann::json::parse(alone.out);
+  EXPECT_TRUE(a["converged"].get<bool>());
+  EXPECT_NEAR(a["translation"][0].get<double>(), 0.02, 1e-3);
+  EXPECT_NEAR(a["translation"][1].get<double>(), 0.0, 1e-3);
+
+  // Set explicitly, point_to_plane is still refused with curves (exit 2, naming the key).
+  const CommandResult plane = Rovermap(files +
+                                       " --set registration.geometry=curve"
+                                       " --set registration.residual=point_to_plane");
+  EXPECT_EQ(plane.status, 2);
+  EXPECT_NE(plane.err.find("registration.residual"), std::string::npos) << plane.err;
 }
 
 TEST_F(RegisterCommand, HelpExitsZero) {
@@ -169,7 +190,8 @@ TEST_F(RegisterCommand, BadInputFilesAreNamed) {
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.name << ": " << r.err;
     EXPECT_TRUE(r.out.empty()) << c.name;
   }
-  const CommandResult missing = Rovermap("register " + (dir_ / "nowhere.ply").string() + " " + good);
+  const CommandResult missing =
+      Rovermap("register " + (dir_ / "nowhere.ply").string() + " " + good);
   EXPECT_EQ(missing.status, 1);
   EXPECT_NE(missing.err.find("nowhere.ply"), std::string::npos) << missing.err;
 }
