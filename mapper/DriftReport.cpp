@@ -137,7 +137,7 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},
       {"peak_rss_mb", run.peak_rss_mb},
       {"dem",
-       {{"cells", run.dem_cells.value_or(state.dem.valid_cells)},
+       {{"cells", state.dem.valid_cells},
         {"cells_reached", state.dem_cells_reached},
         {"tiles", state.dem_tiles},
         {"cell_size_m", state.dem.cell_size_m},
@@ -147,10 +147,8 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
     summary["stereo"] = {{"num_disparities", *state.stereo_num_disparities}};
   }
   if (const auto& tree = state.octomap.get()) {
-    summary["octomap"] = {
-        {"leaves", run.octomap_leaves ? *run.octomap_leaves
-                                      : io::CountSerialisedLeaves(tree->bt, /*binary=*/true)},
-        {"resolution_m", state.octomap_resolution_m}};
+    summary["octomap"] = {{"leaves", io::CountSerialisedLeaves(tree->bt, /*binary=*/true)},
+                          {"resolution_m", state.octomap_resolution_m}};
   }
   if (drift) {
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},

@@ -34,14 +34,10 @@ std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& result
 
 /// What the caller measured around the mapper.
 struct RunInfo {
-  std::string sequence;      ///< input (for the record)
-  double wall_ms = 0.0;      ///< whole run, reading included
-  double write_ms = 0.0;     ///< writing the outputs before summary.json
-  double peak_rss_mb = 0.0;  ///< PeakRssMb() at the end
-  // What the writers counted as they wrote (WriteOutputs fills them); when absent, Summary
-  // counts them in the OutputState.
-  std::optional<std::size_t> dem_cells;             ///< published DEM cells [count]
-  std::optional<std::size_t> octomap_leaves;        ///< OcTree leaves [count]
+  std::string sequence;                             ///< input (for the record)
+  double wall_ms = 0.0;                             ///< whole run, reading included
+  double write_ms = 0.0;                            ///< writing the outputs before summary.json
+  double peak_rss_mb = 0.0;                         ///< PeakRssMb() at the end
   nlohmann::json extra = nlohmann::json::object();  ///< more top-level keys (serve's queue)
 };
 

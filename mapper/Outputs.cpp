@@ -51,13 +51,12 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
   done("drift.csv");
 
-  run.dem_cells =
-      io::WriteDemGeoTiff(out_dir / "dem.tif", state.dem, state.georeference).valid_cells;
+  io::WriteDemGeoTiff(out_dir / "dem.tif", state.dem, state.georeference);
   done("dem.tif");
+  // summary.json counts the DEM's cells and the OcTree's leaves in the same state.
   const std::optional<OctoMapWorker::TreeBytes>& tree = state.octomap.get();
   if (tree) {
     io::WriteFileAtomically(out_dir / "map.bt", tree->bt);
-    run.octomap_leaves = io::CountSerialisedLeaves(tree->bt, /*binary=*/true);
     done("map.bt");
     if (state.write_ot) io::WriteFileAtomically(out_dir / "map.ot", tree->ot);
   }

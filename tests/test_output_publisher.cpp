@@ -23,21 +23,16 @@
 #include "mapper/OutputPublisher.hpp"
 #include "mapper/OutputState.hpp"
 #include "mapper/Outputs.hpp"
+#include "tests/support/CommandFixture.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
 using namespace rovermap;
+using rovermap::testing::Slurp;
 
 namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";  // 5 frames
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::unique_ptr<mapper::Mapper> MapperAfter(std::size_t frames) {
   const config::Config c;
