@@ -223,6 +223,10 @@ std::vector<KeyEntry> BuildRegistry() {
                "published only with this many agreeing supported neighbours; 0 = off");
   dem_keys.Double("neighbor_step_m", &D::neighbor_step_m, "m", AtLeast(0),
                   "largest height step to an agreeing neighbour (or 3 sigma)");
+  dem_keys.Bool("frame_points_correlated", &D::frame_points_correlated,
+                "a frame's points in one cell weigh as one measurement");
+  dem_keys.Bool("slope_aware_variance", &D::slope_aware_variance,
+                "height variance along the surface normal and the slope to the cell centre");
 
   using O = dem::OctoMapOptions;
   SectionKeys<O> octo(keys, "octomap", &Config::octomap);
@@ -277,7 +281,7 @@ std::vector<KeyEntry> BuildRegistry() {
   map.Double("odometry_attitude_sigma_deg", &P::odometry_attitude_sigma_deg, "deg", AtLeast(0),
              "dead reckoning's roll and pitch as absolute, this sigma; 0 = chain alone");
   map.Double("registration_attitude_sigma_deg", &P::registration_attitude_sigma_deg, "deg",
-             AtLeast(0), "roll and pitch uncertainty a registered increment adds");
+             AtLeast(0), "roll and pitch uncertainty a registered increment adds (floor)");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
 

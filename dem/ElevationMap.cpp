@@ -112,6 +112,48 @@ void ElevationMap::RestoreCounters(const CellBounds& bounds, std::size_t covaria
   covariances_ignored_ = covariances_ignored;
 }
 
+std::vector<std::uint32_t> CountPerCell(const std::vector<CellIndex>& cells) {
+  std::vector<std::uint32_t> counts(cells.size(), 1);
+  if (cells.empty()) return counts;
+  // A dense count over the cells' bounding box when it is small (a frame spans metres: some
+  // ten thousand cells), a sort otherwise (e.g. a stray far point).
+  std::int64_t x0 = cells[0].x, x1 = x0, y0 = cells[0].y, y1 = y0;
+  for (const CellIndex& c : cells) {
+    x0 = std::min(x0, c.x);
+    x1 = std::max(x1, c.x);
+    y0 = std::min(y0, c.y);
+    y1 = std::max(y1, c.y);
+  }
+  const auto width = static_cast<std::uint64_t>(x1 - x0) + 1;
+  const auto height = static_cast<std::uint64_t>(y1 - y0) + 1;
+  const std::uint64_t max_dense = std::max<std::uint64_t>(std::uint64_t{1} << 22, 8 * cells.size());
+  if (width <= max_dense && height <= max_dense / width) {
+    std::vector<std::uint32_t> dense(width * height, 0);
+    auto at = [&](const CellIndex& c) -> std::uint32_t& {
+      return dense[static_cast<std::uint64_t>(c.y - y0) * width +
+                   static_cast<std::uint64_t>(c.x - x0)];
+    };
+    for (const CellIndex& c : cells) ++at(c);
+    for (std::size_t i = 0; i < cells.size(); ++i) counts[i] = at(cells[i]);
+    return counts;
+  }
+  std::vector<std::size_t> order(cells.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto less = [&](std::size_t a, std::size_t b) {
+    return cells[a].y != cells[b].y ? cells[a].y < cells[b].y : cells[a].x < cells[b].x;
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (std::size_t begin = 0; begin < order.size();) {
+    std::size_t end = begin + 1;
+    while (end < order.size() && !less(order[begin], order[end])) ++end;
+    for (std::size_t j = begin; j < end; ++j) {
+      counts[order[j]] = static_cast<std::uint32_t>(end - begin);
+    }
+    begin = end;
+  }
+  return counts;
+}
+
 bool ElevationMap::WithinGate(double h, double p, double z, double r) const {
   const double d = z - h;
   return d * d <= options_.mahalanobis_gate * (p + r);
@@ -133,14 +175,14 @@ bool ElevationMap::CandidateTakesOver(const CellRecord& record) const {
   return c.count > v.count;
 }
 
-bool ElevationMap::FuseAt(CellIndex cell, double z, double r, std::uint32_t frame,
+bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
                           FusionStats* stats) {
   Tile& tile = TileFor(index_.CellToTile(cell), stats);
   CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
   CellValue& v = record.value;
   CellCandidate& c = record.candidate;
   const auto zf = static_cast<float>(z);
-  const auto rf = static_cast<float>(r);
+  const auto rf = static_cast<float>(r_update);
   if (v.count == 0) {
     v = {zf, rf, zf, zf, 1, frame};
     record.start_frame = frame;
@@ -151,12 +193,12 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, std::uint32_t fram
   }
   bool into_primary = true;
   if (WithinGate(v.elevation_m, v.variance_m2, z, r)) {
-    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r);
+    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r_update);
     ++v.count;
     v.last_frame = frame;
     if (stats != nullptr) ++stats->fused;
   } else if (c.count > 0 && WithinGate(c.height_m, c.variance_m2, z, r)) {
-    KalmanUpdate(&c.height_m, &c.variance_m2, z, r);
+    KalmanUpdate(&c.height_m, &c.variance_m2, z, r_update);
     ++c.count;
     if (!CandidateTakesOver(record)) {
       into_primary = false;
@@ -195,17 +237,20 @@ bool ElevationMap::FusePoint(const Eigen::Vector3d& point_world, double height_v
     return false;
   }
   const double r = std::max(height_variance_m2, options_.min_point_variance_m2);
-  return FuseAt(*cell, point_world.z(), r, frame, stats);
+  return FuseAt(*cell, point_world.z(), r, r, frame, stats);
 }
 
 FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
                                     const std::vector<Eigen::Matrix3d>& covariances,
                                     const FrameContext& ctx) {
   FusionStats stats;
-  const bool use_cov = !covariances.empty() && covariances.size() == points_world.size();
+  const std::size_t n = points_world.size();
+  stats.points = n;
+  const bool use_cov = !covariances.empty() && covariances.size() == n;
   if (!covariances.empty() && !use_cov) ++covariances_ignored_;
-  const Eigen::Vector3d r3 = ctx.R_world_cov.row(2).transpose();
-  const double default_var = options_.default_point_stddev_m * options_.default_point_stddev_m;
+  const bool has_normals = ctx.normals != nullptr && !ctx.normals->empty();
+  if (has_normals && ctx.normals->size() != n) ++covariances_ignored_;
+  const bool use_normals = has_normals && ctx.normals->size() == n && options_.slope_aware_variance;
 
   // Pose term J Σ Jᵀ with J = (dy, −dx, 0, 0, 0, 1): only rows/cols rx, ry, tz of Σ matter.
   Eigen::Matrix3d pose_block = Eigen::Matrix3d::Zero();
@@ -220,7 +265,15 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   const double max_h = options_.max_horizontal_sigma_cells * options_.cell_size_m;
   const bool limit_h = use_cov && options_.max_horizontal_sigma_cells > 0.0;
 
-  for (std::size_t k = 0; k < points_world.size(); ++k) {
+  // Pass 1: each point's cell and height variance, or why it is dropped.
+  struct Fusable {
+    std::size_t k;
+    CellIndex cell;
+    double r;
+  };
+  std::vector<Fusable> fusable;
+  fusable.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector3d& p = points_world[k];
     if (limit_h) {
       // Largest eigenvalue of the 2×2 horizontal covariance.
@@ -228,19 +281,69 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       const double mean = 0.5 * (h(0, 0) + h(1, 1));
       const double half = 0.5 * (h(0, 0) - h(1, 1));
       if (mean + std::sqrt(half * half + h(0, 1) * h(0, 1)) > max_h * max_h) {
-        ++stats.points;
         ++stats.dropped_imprecise;
         continue;
       }
     }
-    double r = use_cov ? r3.dot(covariances[k] * r3) : default_var;
+    if (!p.allFinite()) {
+      ++stats.dropped_nonfinite;
+      continue;
+    }
+    const auto cell = WorldToCell(p.x(), p.y());
+    if (!cell) {
+      ++stats.dropped_out_of_grid;
+      continue;
+    }
+    const Eigen::Matrix3d* cov = use_cov ? &covariances[k] : nullptr;
+    double r =
+        HeightVariance(p, cov, use_normals ? &(*ctx.normals)[k] : nullptr, ctx.R_world_cov, *cell);
     if (use_pose) {
       const Eigen::Vector3d j(p.y() - c.y(), -(p.x() - c.x()), 1.0);
       r += j.dot(pose_block * j);
     }
-    FusePoint(p, r, ctx.frame, &stats);
+    if (!std::isfinite(r) || r < 0.0) {
+      ++stats.dropped_nonfinite;
+      continue;
+    }
+    fusable.push_back({k, *cell, std::max(r, options_.min_point_variance_m2)});
+  }
+
+  // Pass 2: fuse; with frame_points_correlated the frame's points in a cell weigh as one.
+  std::vector<std::uint32_t> counts;
+  if (options_.frame_points_correlated) {
+    std::vector<CellIndex> cells(fusable.size());
+    for (std::size_t i = 0; i < fusable.size(); ++i) cells[i] = fusable[i].cell;
+    counts = CountPerCell(cells);
+  }
+  for (std::size_t i = 0; i < fusable.size(); ++i) {
+    const Fusable& f = fusable[i];
+    const double m = counts.empty() ? 1.0 : static_cast<double>(counts[i]);
+    FuseAt(f.cell, points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats);
   }
   return stats;
+}
+
+double ElevationMap::HeightVariance(const Eigen::Vector3d& p, const Eigen::Matrix3d* covariance,
+                                    const Eigen::Vector3d* normal,
+                                    const Eigen::Matrix3d& R_world_cov, CellIndex cell) const {
+  const double default_var = options_.default_point_stddev_m * options_.default_point_stddev_m;
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  // in the world frame
+  if (normal != nullptr && normal->allFinite() && normal->norm() > 0.0) {
+    n = (R_world_cov * *normal).normalized();
+    if (n.z() < 0.0) n = -n;
+  }
+  // Steeper than 73° a cell's height means little; the floor keeps the variance finite.
+  constexpr double kMinNormalZ = 0.3;
+  const double nz = std::max(n.z(), kMinNormalZ);
+  double r = default_var;
+  if (covariance != nullptr) {
+    const Eigen::Vector3d n_cov = R_world_cov.transpose() * n;
+    r = n_cov.dot(*covariance * n_cov) / (nz * nz);
+  }
+  if (normal == nullptr) return r;
+  const Eigen::Vector2d d = p.head<2>() - CellCenterWorld(cell);
+  const double offset = (n.x() * d.x() + n.y() * d.y()) / nz;
+  return r + offset * offset;
 }
 
 void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m2,

@@ -71,6 +71,18 @@ struct ElevationMapOptions {
   int min_agreeing_neighbors = 4;
   /// [m] height step to a neighbour that still agrees (when larger than 3σ of the two cells).
   double neighbor_step_m = 0.1;
+  /// The points of one frame that fall in one cell share their errors (correlation stereo
+  /// matches each pixel over a window of its neighbours, and all share the frame's pose): true
+  /// makes them weigh together as one measurement (each one's Kalman update uses its variance ×
+  /// the frame's point count in that cell; the gate its own variance). false counts every point
+  /// as independent, which made the published σ 5× too small (README "The maps").
+  bool frame_points_correlated = true;
+  /// With normals (FrameContext::normals), a point's height variance is that of its distance to
+  /// the surface along the vertical at the cell centre: nᵀΣn / n_z² (its error across the
+  /// surface; on a slope its horizontal error moves it up or down the slope) plus
+  /// ((n_x·d_x + n_y·d_y) / n_z)², d its horizontal offset from the cell centre (the slope
+  /// between where it lies and where the cell's height is read). n_z is floored at 0.3 (73°).
+  bool slope_aware_variance = true;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.
   double grid_rotation_rad = 0.0;
@@ -144,7 +156,13 @@ struct FrameContext {
   /// perturbation applied on the left in the world frame about sensor_origin_world: the point
   /// p moves by δθ×(p − c) + δt. Adds J Σ Jᵀ, J = ∂z/∂(δθ, δt) = (dy, −dx, 0, 0, 0, 1).
   std::optional<Eigen::Matrix<double, 6, 6>> pose_covariance;
+  /// Optional unit surface normals, one per point, in the covariances' frame (rotated by
+  /// R_world_cov into the world); their sign does not matter. See slope_aware_variance.
+  const std::vector<Eigen::Vector3d>* normals = nullptr;
 };
+
+/// For each of `cells`, how many of `cells` are the same cell (a frame's points per cell).
+std::vector<std::uint32_t> CountPerCell(const std::vector<CellIndex>& cells);
 
 /// The sparse elevation grid. Not thread-safe for writes; const queries are.
 class ElevationMap {
@@ -157,9 +175,10 @@ class ElevationMap {
 
   /// Fuses one frame of world points. `covariances` is empty (every point gets
   /// default_point_stddev_m) or one 3×3 covariance [m^2] per point in the frame rotated by
-  /// ctx.R_world_cov; the height variance is r₃ᵀΣr₃ (r₃ = third row of R_world_cov) plus the
-  /// pose term. Never throws (a size mismatch makes the covariances ignored, see
-  /// `covariances_ignored`).
+  /// ctx.R_world_cov; the height variance is r₃ᵀΣr₃ (r₃ = third row of R_world_cov), or the
+  /// slope-aware one with normals, plus the pose term; with frame_points_correlated, the
+  /// frame's points in a cell weigh as one. Never throws (a size mismatch makes the covariances
+  /// or normals ignored, see `covariances_ignored`).
   FusionStats FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
                         const std::vector<Eigen::Matrix3d>& covariances, const FrameContext& ctx);
 
@@ -247,13 +266,20 @@ class ElevationMap {
   /// ...and the counters that FuseFrame keeps beside the tiles.
   void RestoreCounters(const CellBounds& bounds, std::size_t covariances_ignored);
 
-  /// Sizes mismatched between points and covariances over all FuseFrame calls [count].
+  /// Sizes mismatched between points and covariances (or normals) over all FuseFrame calls
+  /// [count].
   std::size_t covariances_ignored() const { return covariances_ignored_; }
 
  private:
   Tile& TileFor(TileIndex tile_index, FusionStats* stats);
-  bool FuseAt(CellIndex cell, double z, double r, std::uint32_t frame, FusionStats* stats);
+  // r gates the point, r_update is its variance in the Kalman update (>= r).
+  bool FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
+              FusionStats* stats);
   bool WithinGate(double h, double p, double z, double r) const;
+  // A point's height variance before the pose term (FuseFrame; normal may be null).
+  double HeightVariance(const Eigen::Vector3d& p, const Eigen::Matrix3d* covariance,
+                        const Eigen::Vector3d* normal, const Eigen::Matrix3d& R_world_cov,
+                        CellIndex cell) const;
   std::optional<CellValue> PublishedAt(double x_m, double y_m) const;
   bool CandidateTakesOver(const CellRecord& record) const;
 

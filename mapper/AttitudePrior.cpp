@@ -1,5 +1,6 @@
 #include "mapper/AttitudePrior.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "mapper/PoseChain.hpp"
@@ -31,6 +32,11 @@ Eigen::Isometry3d AttitudePrior::Update(const Eigen::Isometry3d& T_world_body,
   Eigen::Isometry3d T = T_world_body;
   if (updated.allFinite()) T.linear() = RotationFromEulerRpy(updated);
   return T;
+}
+
+void FloorAttitudeVariance(Eigen::Matrix<double, 6, 6>* covariance, double step_sigma_deg) {
+  const double sigma = step_sigma_deg * M_PI / 180.0;
+  for (int i = 0; i < 2; ++i) (*covariance)(i, i) = std::max((*covariance)(i, i), sigma * sigma);
 }
 
 }  // namespace rovermap::mapper

@@ -34,4 +34,11 @@ class AttitudePrior {
   double variance_ = 0.0;           // [rad²] the chain's, 0 at frame 0 (odometry pose 0)
 };
 
+/// Raises the roll and pitch variances (indices 0 and 1, rotations about the body's x and y) of
+/// a registered increment's 6×6 covariance (order rx ry rz tx ty tz) to at least
+/// `step_sigma_deg`². The registration's own covariance states about 0.01° per step where the
+/// simulated traverses' steps err by 0.04–0.05° (its residuals are not independent), and the
+/// DEM's σ takes the chained pose's covariance.
+void FloorAttitudeVariance(Eigen::Matrix<double, 6, 6>* covariance, double step_sigma_deg);
+
 }  // namespace rovermap::mapper

@@ -296,6 +296,8 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
   out.covariance_in_previous = A * blended.covariance * A.transpose();
+  FloorAttitudeVariance(&out.covariance_in_previous,
+                        options_.mapper.registration_attitude_sigma_deg);
   return out;
 }
 
@@ -334,13 +336,17 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   const Eigen::Isometry3d& T = step.T_world_body;
   std::vector<Eigen::Vector3d> points_world;
   std::vector<Eigen::Matrix3d> covariances;
+  std::vector<Eigen::Vector3d> normals;  // body frame, as the covariances
   points_world.reserve(cloud.size());
   const bool has_cov = cloud.HasCovariances();
+  const bool has_normals = cloud.HasNormals();
   if (has_cov) covariances.reserve(cloud.size());
+  if (has_normals) normals.reserve(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!keep[i]) continue;
     points_world.push_back(T * cloud.points[i]);
     if (has_cov) covariances.push_back(cloud.covariances[i]);
+    if (has_normals) normals.push_back(cloud.normals[i]);
   }
   dem::FrameContext ctx;
   ctx.frame = static_cast<std::uint32_t>(step.index);
@@ -352,6 +358,7 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   T_about_sensor.translation() -= ctx.sensor_origin_world;
   const Matrix6d A = Adjoint(T_about_sensor);
   ctx.pose_covariance = A * step.covariance * A.transpose();
+  if (has_normals) ctx.normals = &normals;
   result->dem = elevation_map_.FuseFrame(points_world, covariances, ctx);
   result->time.fuse_dem_ms = MsSince(dem_start);
 

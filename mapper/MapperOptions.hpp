@@ -50,7 +50,9 @@ struct MapperOptions {
   /// on KITTI (0.2°) it removed the 1.6° roll drift but the registered steps' own tilt then
   /// drove the height 0.6 m off (README, "Known limits").
   double odometry_attitude_sigma_deg = 0.0;
-  /// Roll and pitch uncertainty one registered increment adds to the chain [deg].
+  /// Roll and pitch uncertainty one registered increment adds to the chain [deg]: a floor under
+  /// the registration's own covariance for these angles (FloorAttitudeVariance), and the step
+  /// of AttitudePrior. 0 = the registration's covariance alone.
   double registration_attitude_sigma_deg = 0.05;
 
   /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to

@@ -20,6 +20,27 @@ Eigen::Isometry3d Pose(double roll_deg, double pitch_deg, double yaw_deg) {
   return T;
 }
 
+// The registered increment's roll and pitch variances are raised to the step's σ², never
+// lowered; yaw, translation and the cross terms stay the registration's.
+TEST(FloorAttitudeVariance, RaisesRollAndPitchOnly) {
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity() * 1e-8;
+  cov(0, 1) = cov(1, 0) = 2e-9;
+  cov(1, 1) = 1.0;  // already above the floor
+  const Eigen::Matrix<double, 6, 6> before = cov;
+  FloorAttitudeVariance(&cov, 0.05);
+  const double floor = std::pow(0.05 * M_PI / 180.0, 2.0);
+  EXPECT_DOUBLE_EQ(cov(0, 0), floor);
+  EXPECT_DOUBLE_EQ(cov(1, 1), 1.0);
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      if (i != j || i > 1) {
+        EXPECT_EQ(cov(i, j), before(i, j)) << i << "," << j;
+      }
+    }
+  }
+  FloorAttitudeVariance(&cov, 0.0);  // 0 = the registration's covariance alone
+  EXPECT_DOUBLE_EQ(cov(0, 0), floor);
+}
 }  // namespace
 
 TEST(AttitudePrior, OffLeavesThePoseAlone) {

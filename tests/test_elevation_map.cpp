@@ -80,7 +80,9 @@ TEST(ElevationMap, RejectsBadOptions) {
 }
 
 TEST(ElevationMap, PlaneGivesTheExactPlaneAndShrinkingVariance) {
-  ElevationMap map(Support(3));
+  ElevationMapOptions independent = Support(3);
+  independent.frame_points_correlated = false;
+  ElevationMap map(independent);
   const auto points = Sample([](double, double) { return 1.25; }, -2.0, 3.0, -1.0, 4.0, 50000);
   const FusionStats stats = map.FuseFrame(points, {}, Frame(0));
   EXPECT_EQ(stats.points, points.size());
@@ -99,6 +101,101 @@ TEST(ElevationMap, PlaneGivesTheExactPlaneAndShrinkingVariance) {
   EXPECT_EQ(total, points.size());
   EXPECT_EQ(map.HeightAt(0.5, 0.5), 1.25);
   EXPECT_TRUE(std::isnan(map.HeightAt(10.0, 10.0)));
+}
+
+// With frame_points_correlated (the default), the m points of one frame in one cell weigh as
+// one measurement: after K frames of a plane every cell's variance is r / K, however many
+// points each frame put in it; the height is the same as with independent points.
+TEST(ElevationMap, FramePointsInACellWeighAsOneMeasurement) {
+  ElevationMap map(Support(3));
+  const double r = 0.02 * 0.02;
+  constexpr int kFrames = 4;
+  for (int k = 0; k < kFrames; ++k) {
+    const auto points =
+        Sample([](double, double) { return 1.25; }, -2.0, 3.0, -1.0, 4.0, 5000 * (k + 1), 10 + k);
+    map.FuseFrame(points, {}, Frame(k));
+  }
+  std::size_t checked = 0;
+  map.ForEachCell([&](CellIndex, const CellValue& v) {
+    if (v.last_frame != kFrames - 1 || v.count < 2 * kFrames) return;  // seen by every frame
+    ++checked;
+    EXPECT_EQ(v.elevation_m, 1.25f);
+    // Each frame's m points, variance m·r each, combine to r; K frames to r / K. (Cells some
+    // frame missed have r / K' for their K'; counted below by the bound.)
+    EXPECT_GE(v.variance_m2, r / kFrames * (1.0 - 1e-5));
+  });
+  EXPECT_GT(checked, 1000u);
+  // A cell every frame reached: exactly r / K (one point or many per frame).
+  std::size_t exact = 0;
+  map.ForEachCell([&](CellIndex, const CellValue& v) {
+    if (std::abs(v.variance_m2 - r / kFrames) < 1e-6 * r) ++exact;
+  });
+  EXPECT_GT(exact, 1000u);
+}
+
+// The count per cell behind frame_points_correlated, against a brute-force count, on a compact
+// frame (dense path) and with a stray far cell (sorted path).
+TEST(ElevationMap, CountPerCellMatchesBruteForce) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> u(-20, 20);
+  for (const bool stray : {false, true}) {
+    std::vector<CellIndex> cells;
+    for (int i = 0; i < 3000; ++i) cells.push_back({u(rng), u(rng)});
+    if (stray) cells.push_back({std::int64_t{1} << 40, -(std::int64_t{1} << 40)});
+    const std::vector<std::uint32_t> counts = CountPerCell(cells);
+    ASSERT_EQ(counts.size(), cells.size());
+    for (std::size_t i = 0; i < cells.size(); i += 7) {
+      const auto same = std::count_if(cells.begin(), cells.end(), [&](const CellIndex& c) {
+        return c.x == cells[i].x && c.y == cells[i].y;
+      });
+      EXPECT_EQ(counts[i], static_cast<std::uint32_t>(same)) << i << (stray ? " stray" : "");
+    }
+    EXPECT_EQ(counts.back(), stray ? 1u : counts.back());
+  }
+  EXPECT_TRUE(CountPerCell({}).empty());
+}
+
+// slope_aware_variance: with a normal, a point's height variance is nᵀΣn / n_z² plus the square
+// of the slope times its offset from the cell centre; without normals it stays Σ_zz.
+TEST(ElevationMap, SlopeAwareVarianceFollowsTheNormal) {
+  ElevationMapOptions options = Support(1);
+  options.max_horizontal_sigma_cells = 0.0;
+  const Eigen::Matrix3d cov = Eigen::Vector3d(4e-4, 1e-4, 9e-6).asDiagonal();
+  // A 30° slope rising along x: n = (−sin 30°, 0, cos 30°).
+  const double s = std::sin(M_PI / 6), c = std::cos(M_PI / 6);
+  const Eigen::Vector3d normal(-s, 0.0, c);
+  ElevationMap probe(options);
+  const CellIndex cell{10, 10};
+  const Eigen::Vector2d centre = probe.CellCenterWorld(cell);
+  const double dx = 0.01;  // 1 cm east of the centre
+  const Eigen::Vector3d p(centre.x() + dx, centre.y(), 0.5);
+  const double expected = (s * s * 4e-4 + c * c * 9e-6) / (c * c) + std::pow((-s * dx) / c, 2.0);
+  for (const bool aware : {true, false}) {
+    options.slope_aware_variance = aware;
+    ElevationMap map(options);
+    const std::vector<Eigen::Vector3d> normals{normal};
+    FrameContext ctx = Frame(0);
+    ctx.normals = &normals;
+    map.FuseFrame({p}, {cov}, ctx);
+    const auto v = map.Cell(cell);
+    ASSERT_TRUE(v.has_value());
+    EXPECT_NEAR(v->variance_m2, aware ? expected : 9e-6, 1e-9) << aware;
+  }
+  // The normal's sign does not matter; a normal count that does not match is ignored (counted).
+  ElevationMap map(Support(1));
+  const std::vector<Eigen::Vector3d> flipped{-normal}, two{normal, normal};
+  FrameContext ctx = Frame(0);
+  ctx.normals = &flipped;
+  ElevationMapOptions aware = Support(1);
+  aware.max_horizontal_sigma_cells = 0.0;
+  ElevationMap flipped_map(aware);
+  flipped_map.FuseFrame({p}, {cov}, ctx);
+  EXPECT_NEAR(flipped_map.Cell(cell)->variance_m2, expected, 1e-9);
+  ctx.normals = &two;
+  ElevationMap mismatched(aware);
+  mismatched.FuseFrame({p}, {cov}, ctx);
+  EXPECT_NEAR(mismatched.Cell(cell)->variance_m2, 9e-6, 1e-9);
+  EXPECT_EQ(mismatched.covariances_ignored(), 1u);
 }
 
 TEST(ElevationMap, SlopeSampledAtCellCentresIsExact) {
