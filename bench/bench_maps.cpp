@@ -60,14 +60,21 @@ long RssKiB() {
 }
 
 // Fusion of one 300k-point frame per iteration into a map that already holds the terrain.
+// model 0: every point independent, no normals (the fusion before frame_points_correlated and
+// slope_aware_variance); model 1: the defaults, with normals.
 void BM_DemFusion(benchmark::State& state) {
   const bool with_covariances = state.range(0) != 0;
+  const bool defaults = state.range(1) != 0;
   const auto points = StereoFrame(0.0, 300000, 1);
   std::vector<Eigen::Matrix3d> covariances;
   if (with_covariances) covariances.assign(points.size(), Eigen::Matrix3d::Identity() * 1e-4);
-  dem::ElevationMap map;
+  const std::vector<Eigen::Vector3d> normals(points.size(), Eigen::Vector3d(0.1, 0.0, 0.995));
+  dem::ElevationMapOptions options;
+  options.frame_points_correlated = defaults;
+  dem::ElevationMap map(options);
   dem::FrameContext ctx;
   ctx.sensor_origin_world = {0.0, 0.0, 1.5};
+  if (defaults) ctx.normals = &normals;
   if (with_covariances) {
     ctx.pose_covariance = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
   }
@@ -82,7 +89,10 @@ void BM_DemFusion(benchmark::State& state) {
   state.counters["fused_ratio"] =
       static_cast<double>(last.fused + last.swapped) / static_cast<double>(last.points);
 }
-BENCHMARK(BM_DemFusion)->Arg(0)->Arg(1)->ArgName("covariances")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DemFusion)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgNames({"covariances", "model"})
+    ->Unit(benchmark::kMillisecond);
 
 // One frame of ~300k points into a tree that has seen the previous frames (the rover moves
 // 0.3 m per frame), including the per-frame inner-occupancy update.

@@ -326,24 +326,24 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
 double ElevationMap::HeightVariance(const Eigen::Vector3d& p, const Eigen::Matrix3d* covariance,
                                     const Eigen::Vector3d* normal,
                                     const Eigen::Matrix3d& R_world_cov, CellIndex cell) const {
-  const double default_var = options_.default_point_stddev_m * options_.default_point_stddev_m;
-  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  // in the world frame
-  if (normal != nullptr && normal->allFinite() && normal->norm() > 0.0) {
-    n = (R_world_cov * *normal).normalized();
-    if (n.z() < 0.0) n = -n;
+  if (normal == nullptr || !normal->allFinite()) {
+    if (covariance == nullptr) {
+      return options_.default_point_stddev_m * options_.default_point_stddev_m;
+    }
+    const Eigen::Vector3d r3 = R_world_cov.row(2).transpose();
+    return r3.dot(*covariance * r3);
   }
+  // The sign of the normal cancels in both terms below; n_z's does not.
+  const Eigen::Vector3d n = R_world_cov * *normal;
   // Steeper than 73° a cell's height means little; the floor keeps the variance finite.
   constexpr double kMinNormalZ = 0.3;
-  const double nz = std::max(n.z(), kMinNormalZ);
-  double r = default_var;
-  if (covariance != nullptr) {
-    const Eigen::Vector3d n_cov = R_world_cov.transpose() * n;
-    r = n_cov.dot(*covariance * n_cov) / (nz * nz);
-  }
-  if (normal == nullptr) return r;
+  const double nz = std::max(std::abs(n.z()), kMinNormalZ);
+  const double across = covariance != nullptr ? normal->dot(*covariance * *normal)
+                                              : options_.default_point_stddev_m *
+                                                    options_.default_point_stddev_m * n.z() * n.z();
   const Eigen::Vector2d d = p.head<2>() - CellCenterWorld(cell);
-  const double offset = (n.x() * d.x() + n.y() * d.y()) / nz;
-  return r + offset * offset;
+  const double offset = n.x() * d.x() + n.y() * d.y();
+  return (across + offset * offset) / (nz * nz);
 }
 
 void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m2,
