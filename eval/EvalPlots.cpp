@@ -107,17 +107,32 @@ void WriteDemErrorPlot(const std::filesystem::path& path, const DemComparison& c
     const auto fade = static_cast<unsigned char>(std::lround(255.0 * (1.0 - std::abs(s))));
     return s >= 0 ? cv::Vec3b(fade, fade, 255) : cv::Vec3b(255, fade, fade);
   };
+  int row0 = c.height, row1 = -1, col0 = c.width, col1 = -1;
   for (int r = 0; r < c.height; ++r)
     for (int col = 0; col < c.width; ++col) {
       const float e = c.error_m[static_cast<std::size_t>(r) * c.width + col];
-      if (std::isfinite(e)) grid.at<cv::Vec3b>(r, col) = colour_of(e);
+      if (!std::isfinite(e)) continue;
+      grid.at<cv::Vec3b>(r, col) = colour_of(e);
+      row0 = std::min(row0, r);
+      row1 = std::max(row1, r);
+      col0 = std::min(col0, col);
+      col1 = std::max(col1, col);
     }
+  if (row1 < 0) throw std::invalid_argument("DEM error plot: no compared cell");
+  // Only the compared area and a margin: a traverse's DEM is a small patch of a site-wide
+  // reference, and drawn whole it would be a few pixels.
+  const int margin = std::max(2, std::max(row1 - row0, col1 - col0) / 20);
+  row0 = std::max(0, row0 - margin);
+  col0 = std::max(0, col0 - margin);
+  row1 = std::min(c.height - 1, row1 + margin);
+  col1 = std::min(c.width - 1, col1 + margin);
+  grid = grid(cv::Rect(col0, row0, col1 - col0 + 1, row1 - row0 + 1)).clone();
   if (!c.north_row_first) cv::flip(grid, grid, 0);  // draw north up
-  const double scale = std::min(700.0 / c.width, 700.0 / c.height);
+  const double scale = std::min(700.0 / grid.cols, 700.0 / grid.rows);
   cv::Mat map;
   cv::resize(grid, map,
-             cv::Size(std::max(1, static_cast<int>(c.width * scale)),
-                      std::max(1, static_cast<int>(c.height * scale))),
+             cv::Size(std::max(1, static_cast<int>(grid.cols * scale)),
+                      std::max(1, static_cast<int>(grid.rows * scale))),
              0, 0, cv::INTER_NEAREST);
   cv::Mat img(map.rows + 110, map.cols + 160, CV_8UC3, kWhite);
   map.copyTo(img(cv::Rect(20, 60, map.cols, map.rows)));
@@ -132,11 +147,15 @@ void WriteDemErrorPlot(const std::filesystem::path& path, const DemComparison& c
   cv::putText(img, "0", {bar_x + 25, 60 + bar_h / 2 + 5}, kFont, 0.45, kBlack, 1, cv::LINE_AA);
   cv::putText(img, "-" + Format(limit) + " m", {bar_x + 25, 60 + bar_h - 2}, kFont, 0.45, kBlack, 1,
               cv::LINE_AA);
-  cv::putText(img, "DEM - reference [m], " + Format(c.cell_size_m) + " m cells, grey: not compared",
-              {20, 25}, kFont, 0.5, kBlack, 1, cv::LINE_AA);
+  const std::string within =
+      std::isfinite(c.within_2sigma) ? ", " + Format(c.within_2sigma) + " within 2 sigma" : "";
+  cv::putText(
+      img,
+      "DEM - reference [m], " + Format(c.cell_size_m) + " m cells, grey: not compared" + within,
+      {20, 25}, kFont, 0.5, kBlack, 1, cv::LINE_AA);
   cv::putText(img,
               "rmse " + Format(c.rmse_m) + " m, bias " + Format(c.bias_m) + " m, p95 " +
-                  Format(c.p95_abs_m) + " m, coverage " + Format(c.coverage),
+                  Format(c.p95_abs_m) + " m, " + Format(c.coverage) + " of the reference mapped",
               {20, 48}, kFont, 0.5, kBlack, 1, cv::LINE_AA);
   WritePng(path, img);
 }

@@ -28,7 +28,8 @@ void WriteTrajectoryPlot(const std::filesystem::path& path, const std::vector<Pl
 void WriteErrorPlot(const std::filesystem::path& path, const std::vector<PlotEntry>& entries);
 
 /// The DEM − reference error per comparison cell (blue below, red above, grey not compared),
-/// scaled to ±max(p95_abs_m, 1 mm), with a colour bar.
+/// scaled to ±max(p95_abs_m, 1 mm), with a colour bar; cropped to the compared cells and a
+/// margin of 5 % (at least 2 cells).
 /// @throw io::IoError naming the file if it cannot be written; std::invalid_argument if the
 ///        comparison has no cells.
 void WriteDemErrorPlot(const std::filesystem::path& path, const DemComparison& comparison);

@@ -10,11 +10,13 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
 
-#include "tests/support/ScratchDir.hpp"
 #include "eval/DemComparison.hpp"
+#include "eval/EvalPlots.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/IoError.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::eval {
 namespace {
@@ -201,6 +203,36 @@ TEST(CompareDems, NoOverlapAndBadFiles) {
       EXPECT_NE(std::string(e.what()).find(bad.filename().string()), std::string::npos) << e.what();
     }
   }
+}
+
+// dem_error.png shows the compared cells, not the whole reference: a 10 × 10-cell patch of a
+// 400 × 400-cell reference fills most of the picture's map (drawn whole it was 0.06 % of it).
+TEST(DemErrorPlot, IsCroppedToTheComparedCells) {
+  DemComparison c;
+  c.width = c.height = 400;
+  c.cell_size_m = 0.05;
+  c.cells = 100;
+  c.rmse_m = c.p95_abs_m = c.max_abs_m = 0.01;
+  c.bias_m = 0.0;
+  c.coverage = 100.0 / 160000.0;
+  c.error_m.assign(400 * 400, std::numeric_limits<float>::quiet_NaN());
+  for (int r = 200; r < 210; ++r)
+    for (int col = 300; col < 310; ++col) c.error_m[r * 400 + col] = (r + col) % 2 ? 0.01f : -0.01f;
+  const std::filesystem::path png = rovermap::testing::ScratchDir() / "dem_error_crop.png";
+  WriteDemErrorPlot(png, c);
+  const cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  std::size_t coloured = 0, grey = 0;
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+      if (p == cv::Vec3b(200, 200, 200)) ++grey;
+      if (p == cv::Vec3b(0, 0, 255) || p == cv::Vec3b(255, 0, 0)) ++coloured;
+    }
+  }
+  // Patch plus a 2-cell margin each side: 100 of 196 cells compared.
+  EXPECT_GT(coloured, grey) << coloured << " coloured, " << grey << " grey pixels";
+  EXPECT_GT(coloured, 100000u);
 }
 
 }  // namespace
