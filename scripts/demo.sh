@@ -19,6 +19,8 @@ grep -v 'replay: frame ' "$out/replay.log" || true
 echo "   DEM against the true terrain (json: $out/replay/dem_vs_terrain.json):"
 grep -E '"(rmse_m|bias_m|p95_abs_m|coverage|within_2sigma)"' "$out/replay/dem_vs_terrain.json" |
   tr -d ' ,' | sed 's/^/     /'
+echo "   (coverage: the fraction of the whole simulated terrain the traverse mapped; within_2sigma:"
+echo "    the cells whose error lies within twice the DEM's stated sigma, about 0.95 if it is right)"
 echo "   pictures: $out/replay/dem.png $out/replay/drift.png $out/replay/dem_error.png"
 
 # A real scan pair: Stanford bunny bun045 -> bun000, started 10° and 5 mm off the reference
