@@ -134,9 +134,9 @@ double MedianNeighborSpacing(const std::vector<Eigen::Vector3d>& points, const K
   std::vector<double> spacing(static_cast<std::size_t>(samples), std::nan(""));
 #pragma omp parallel for schedule(static) if (samples > 512)
   for (long s = 0; s < samples; ++s) {
-    // The point itself and its nearest neighbour; a few more only when that one is an exact
-    // duplicate, so that duplicates do not hide the real spacing (a 2-NN search prunes sooner:
-    // this was an eighth of a bunny registration).
+    // The point itself and its nearest neighbour (a 2-NN search prunes sooner than a 4-NN);
+    // a few more only when that one is an exact duplicate, so that duplicates do not hide the
+    // real spacing.
     std::size_t indices[4];
     double dists[4];
     const Eigen::Vector3d& p = points[static_cast<std::size_t>(s) * step];
