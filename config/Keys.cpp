@@ -85,6 +85,8 @@ std::vector<KeyEntry> BuildRegistry() {
   reg.Double("orientation_min_rejected", &R::orientation_min_rejected, "ratio",
              Bounds{0, false, 1, false},
              "staged test: kept for the fine stage if it rejected this much; 0 = always");
+  reg.Int("clean_sample_step", &R::clean_sample_step, "count", AtLeast(1),
+          "staged test dropped (clean pairs): the fine stage matches every k-th sampled point");
   reg.Int("normal_neighbors", &R::normal_neighbors, "count", AtLeast(3),
           "PCA normal neighbours if the cloud has none");
   reg.Double("sample_voxel_factor", &R::sample_voxel_factor, "x D", AtLeast(0),

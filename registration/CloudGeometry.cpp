@@ -134,11 +134,14 @@ double MedianNeighborSpacing(const std::vector<Eigen::Vector3d>& points, const K
   std::vector<double> spacing(static_cast<std::size_t>(samples), std::nan(""));
 #pragma omp parallel for schedule(static) if (samples > 512)
   for (long s = 0; s < samples; ++s) {
-    // A few neighbours so that exact duplicates do not hide the real spacing.
+    // The point itself and its nearest neighbour (a 2-NN search prunes sooner than a 4-NN);
+    // a few more only when that one is an exact duplicate, so that duplicates do not hide the
+    // real spacing.
     std::size_t indices[4];
     double dists[4];
-    const std::size_t found =
-        tree.FindKNearest(points[static_cast<std::size_t>(s) * step], 4, indices, dists);
+    const Eigen::Vector3d& p = points[static_cast<std::size_t>(s) * step];
+    std::size_t found = tree.FindKNearest(p, 2, indices, dists);
+    if (found == 2 && !(dists[1] > 0.0)) found = tree.FindKNearest(p, 4, indices, dists);
     for (std::size_t j = 0; j < found; ++j) {
       if (dists[j] > 0.0) {
         spacing[static_cast<std::size_t>(s)] = std::sqrt(dists[j]);

@@ -97,7 +97,7 @@ struct RegistrationResult {
   bool converged = false;
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   int iterations = 0;
-  std::size_t sample_points = 0;      ///< source points matched (voxel sample, see Options)
+  std::size_t sample_points = 0;      ///< source points matched at the end (see Options)
   std::size_t inliers = 0;            ///< sampled points paired within the final Dmax / gate
   double inlier_ratio = 0.0;          ///< inliers / sample_points: low means little overlap found
   double rms_m = 0.0;                 ///< RMS distance of those pairs [m]

@@ -76,6 +76,12 @@ struct RegistrationOptions {
   bool staged_orientation_test = true;
   /// [ratio]; 0 = the staged test is always kept.
   double orientation_min_rejected = 0.006;
+  /// When the staged test is dropped (the coarse stage found the pairs clean), the fine stage
+  /// and the final pairs use every k-th sampled point only [count]; 1 = the whole sample.
+  /// Clean pairs need fewer points for the same accuracy: on the bunny scans every 4th of the
+  /// 15 000 gave errors as small as the whole sample (every 5th did not); a pair whose
+  /// coarse stage still finds false matches (terrain with outliers) keeps the whole sample.
+  int clean_sample_step = 4;
   /// Neighbours used for PCA surface normals when the cloud has none [count].
   int normal_neighbors = 10;
 

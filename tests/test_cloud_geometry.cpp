@@ -14,16 +14,19 @@ TEST(CloudGeometry, PlaneNormalsAreThePlaneNormal) {
   const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
   std::vector<Eigen::Vector3d> pts;
   for (int i = 0; i < 30; ++i)
-    for (int j = 0; j < 30; ++j) pts.push_back(0.1 * i * u + 0.1 * j * v + Eigen::Vector3d(1, 2, 3));
+    for (int j = 0; j < 30; ++j)
+      pts.push_back(0.1 * i * u + 0.1 * j * v + Eigen::Vector3d(1, 2, 3));
   const KdTree tree(pts);
-  for (const auto& normal : EstimateNormals(pts, tree, 10)) EXPECT_NEAR(std::abs(normal.dot(n)), 1.0, 1e-9);
+  for (const auto& normal : EstimateNormals(pts, tree, 10))
+    EXPECT_NEAR(std::abs(normal.dot(n)), 1.0, 1e-9);
 }
 
 TEST(CloudGeometry, SphereNormalsAreRadial) {
   std::mt19937 rng(1);
   std::normal_distribution<double> g(0.0, 1.0);
   std::vector<Eigen::Vector3d> pts;
-  for (int i = 0; i < 5000; ++i) pts.push_back(Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized());
+  for (int i = 0; i < 5000; ++i)
+    pts.push_back(Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized());
   const KdTree tree(pts);
   const auto normals = EstimateNormals(pts, tree, 12);
   for (std::size_t i = 0; i < pts.size(); ++i) EXPECT_GT(std::abs(normals[i].dot(pts[i])), 0.98);
@@ -67,6 +70,12 @@ TEST(CloudGeometry, MedianSpacingOfAGrid) {
   for (std::size_t k = 0; k < n; k += 3) pts.push_back(pts[k]);
   const KdTree tree(pts);
   EXPECT_NEAR(MedianNeighborSpacing(pts, tree), 0.05, 1e-12);
+  // Every point twice: each one's nearest neighbour is its duplicate (the search then looks
+  // further than the nearest two).
+  std::vector<Eigen::Vector3d> doubled(pts.begin(), pts.begin() + static_cast<long>(n));
+  doubled.insert(doubled.end(), pts.begin(), pts.begin() + static_cast<long>(n));
+  const KdTree doubled_tree(doubled);
+  EXPECT_NEAR(MedianNeighborSpacing(doubled, doubled_tree), 0.05, 1e-12);
   const std::vector<Eigen::Vector3d> same(10, Eigen::Vector3d(1, 1, 1));
   const KdTree same_tree(same);
   EXPECT_EQ(MedianNeighborSpacing(same, same_tree), 0.0);

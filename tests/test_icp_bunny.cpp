@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "config/Config.hpp"
 #include "io/PointCloudIo.hpp"
@@ -173,7 +175,8 @@ TEST_F(Bunny, OrientationTestIsDroppedOnCleanScansAfterTheCoarseStage) {
   std::size_t source_normals = 0;
   for (std::size_t i = 0; i < source.cloud().size(); ++i)
     source_normals += !source.orientation(i).isZero();
-  EXPECT_LE(source_normals, r.sample_points / 10 + 1);
+  const auto sampled = static_cast<std::size_t>(options.max_sample_points);
+  EXPECT_LE(source_normals, sampled / static_cast<std::size_t>(options.coarse_step) + 1);
 
   RegistrationOptions always = options;
   always.orientation_min_rejected = 0.0;
@@ -182,4 +185,60 @@ TEST_F(Bunny, OrientationTestIsDroppedOnCleanScansAfterTheCoarseStage) {
   const auto [rot_kept, trans_kept] = PoseError(kept.T_target_source, truth);
   EXPECT_LT(rot, rot_kept + 0.01);
   EXPECT_LT(trans, trans_kept + 0.00005);
+}
+
+// Clean pairs need fewer points (clean_sample_step): once the staged test is dropped, the fine
+// stage matches every 4th of the 15 000 sampled points, at least as accurately as the whole
+// sample. Measured over 8 perturbation axes, mean rotation / translation error: bun045
+// 0.068° / 0.090 mm (whole sample 0.080° / 0.109 mm), bun315 0.067° / 0.104 mm (0.072° /
+// 0.109 mm); every 5th was worse on bun045 (0.092° / 0.116 mm).
+TEST_F(Bunny, CleanPairsAreMatchedOnAThinnerSampleAtTheSameAccuracy) {
+  const RegistrationOptions options;
+  ASSERT_GT(options.clean_sample_step, 1);
+  RegistrationOptions whole = options;
+  whole.clean_sample_step = 1;
+  const std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d(1, 2, 3),  Eigen::Vector3d(1, 0, 0),
+                                             Eigen::Vector3d(0, 1, 0),  Eigen::Vector3d(0, 0, 1),
+                                             Eigen::Vector3d(-1, 1, 2), Eigen::Vector3d(2, -1, 1),
+                                             Eigen::Vector3d(1, 1, -1), Eigen::Vector3d(-3, 1, 1)};
+  for (const char* name : {"bun045.ply", "bun315.ply"}) {
+    const PointCloud& scan = std::string(name) == "bun045.ply" ? *bun045_ : *bun315_;
+    const Eigen::Isometry3d truth = GroundTruth(name, "bun000.ply");
+    const IndexedCloud source(scan, options), target(*bun000_, options);
+    double rot_sum = 0.0, trans_sum = 0.0, rot_whole_sum = 0.0, trans_whole_sum = 0.0;
+    std::size_t thinned = 0;
+    for (const Eigen::Vector3d& axis : axes) {
+      const Eigen::Isometry3d init = Perturb(truth, 10.0, 0.005, axis);
+      const RegistrationResult r = Register(source, target, init, options);
+      EXPECT_TRUE(r.converged) << name << " axis " << axis.transpose();
+      const bool dropped = r.trace.back().pairs_rejected_by_orientation == 0;
+      if (dropped) {
+        ++thinned;
+        const std::size_t fine = (static_cast<std::size_t>(options.max_sample_points) +
+                                  static_cast<std::size_t>(options.clean_sample_step) - 1) /
+                                 static_cast<std::size_t>(options.clean_sample_step);
+        EXPECT_EQ(r.sample_points, fine) << name;
+        EXPECT_EQ(r.trace.back().queries, fine) << name;
+      }
+      const auto [rot, trans] = PoseError(r.T_target_source, truth);
+      const RegistrationResult w = Register(scan, *bun000_, init, whole);
+      const auto [rot_w, trans_w] = PoseError(w.T_target_source, truth);
+      EXPECT_LT(rot, 0.09) << name << " axis " << axis.transpose();
+      EXPECT_LT(trans, 0.00013) << name << " axis " << axis.transpose();
+      rot_sum += rot;
+      trans_sum += trans;
+      rot_whole_sum += rot_w;
+      trans_whole_sum += trans_w;
+    }
+    const double n = static_cast<double>(axes.size());
+    std::printf(
+        "%s: mean %.4f deg / %.4f mm with clean_sample_step %d (thinned on %zu of %zu), %.4f / "
+        "%.4f mm "
+        "on the whole sample\n",
+        name, rot_sum / n, 1e3 * trans_sum / n, options.clean_sample_step, thinned, axes.size(),
+        rot_whole_sum / n, 1e3 * trans_whole_sum / n);
+    EXPECT_GE(thinned, axes.size() / 2) << name;
+    EXPECT_LE(rot_sum, rot_whole_sum) << name;
+    EXPECT_LE(trans_sum, trans_whole_sum) << name;
+  }
 }
