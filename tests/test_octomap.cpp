@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -185,6 +186,41 @@ TEST(BatchOcTree, PointsBeyondTheKeysDropped) {
   EXPECT_EQ(stats.dropped_out_of_bounds, 2u);
   EXPECT_EQ(stats.inserted, points.size() - 2);
   EXPECT_TRUE(Occupied(*fusion.tree(), 2.0, 0.5, 0.01));
+}
+
+// Save and Restore: the restored fusion goes on as the saved one; a state from an earlier
+// version (inner nodes stale, flagged in the second word) gets its inner nodes brought up to
+// date, which the batch walk relies on.
+TEST(OctoMapFusion, RestoreGoesOnIdenticallyAndMendsStaleInnerNodes) {
+  dem::OctoMapFusion saved;
+  saved.InsertFrame(RoughFrame(0), {-0.5, 0.0, 1.4});
+  std::stringstream state;
+  ASSERT_TRUE(saved.Save(state));
+  dem::OctoMapFusion restored;
+  restored.Restore(state);
+  saved.InsertFrame(RoughFrame(1), {0.0, 0.0, 1.4});
+  restored.InsertFrame(RoughFrame(1), {0.0, 0.0, 1.4});
+  EXPECT_TRUE(*restored.tree() == *saved.tree());
+
+  // An earlier version's state: insertPointCloud without the inner update, schedule {7, stale}.
+  octomap::OcTree stale(0.1);
+  {
+    octomap::Pointcloud cloud;
+    for (const Eigen::Vector3d& p : RoughFrame(0))
+      cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                      static_cast<float>(p.z()));
+    stale.insertPointCloud(cloud, octomap::point3d(-0.5f, 0.0f, 1.4f), 20.0, true, true);
+  }
+  std::stringstream old_state;
+  const std::int32_t schedule[2] = {7, 1};
+  old_state.write(reinterpret_cast<const char*>(schedule), sizeof(schedule));
+  old_state << dem::FullOcTreeBytes(stale);
+  dem::OctoMapFusion from_old;
+  from_old.Restore(old_state);
+  stale.updateInnerOccupancy();
+  EXPECT_TRUE(*from_old.tree() == stale);
+  from_old.InsertFrame(RoughFrame(1), {0.0, 0.0, 1.4});
+  EXPECT_TRUE(*from_old.tree() == *saved.tree());
 }
 
 TEST(OctoMapFusion, MaxRangeTruncatesRays) {
