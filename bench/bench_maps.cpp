@@ -146,10 +146,7 @@ void BM_OctoMapInsertGrown(benchmark::State& state) {
   state.counters["leaves"] = static_cast<double>(tree.getNumLeafNodes());
 }
 BENCHMARK(BM_OctoMapInsertGrown)
-    ->Args({0, 0})
-    ->Args({0, 1})
-    ->Args({600, 0})
-    ->Args({600, 1})
+    ->ArgsProduct({{0, 600}, {0, 1}})
     ->ArgNames({"grown", "impl"})
     ->Unit(benchmark::kMillisecond);
 
