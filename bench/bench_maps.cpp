@@ -16,6 +16,7 @@
 #include <sstream>
 #include <vector>
 
+#include "dem/BatchOcTree.hpp"
 #include "dem/ElevationMap.hpp"
 #include "dem/OcTreeBytes.hpp"
 #include "dem/OctoMapFusion.hpp"
@@ -95,7 +96,7 @@ BENCHMARK(BM_DemFusion)
     ->Unit(benchmark::kMillisecond);
 
 // One frame of ~300k points into a tree that has seen the previous frames (the rover moves
-// 0.3 m per frame), including the per-frame inner-occupancy update.
+// 0.3 m per frame), inner nodes on the touched paths included (dem::BatchOcTree).
 void BM_OctoMapInsert(benchmark::State& state) {
   dem::OctoMapOptions options;
   options.resolution_m = static_cast<double>(state.range(0)) / 1000.0;
@@ -116,6 +117,47 @@ BENCHMARK(BM_OctoMapInsert)
     ->Arg(100)
     ->Arg(50)
     ->ArgName("resolution_mm")
+    ->Unit(benchmark::kMillisecond);
+
+// A cloud-sized frame (20k points) into an empty tree (Arg grown 0) or one grown by 600 frames
+// along a 180 m road, the frame revisiting the road's start: Arg impl 0 is
+// octomap's insertPointCloud (lazy, discretized) with updateInnerOccupancy every 50 frames, as
+// dem::OctoMapFusion did before, 1 is dem::BatchOcTree (the fusion now). Same trees.
+void BM_OctoMapInsertGrown(benchmark::State& state) {
+  const int grown = static_cast<int>(state.range(0));
+  const bool batch = state.range(1) == 1;
+  dem::BatchOcTree tree(0.1);
+  std::vector<octomap::point3d> cloud;
+  int frames = 0;
+  const auto insert = [&](const std::vector<Eigen::Vector3d>& points, double x0) {
+    cloud.clear();
+    for (const Eigen::Vector3d& p : points)
+      cloud.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                         static_cast<float>(p.z()));
+    const octomap::point3d origin(static_cast<float>(x0), 0.0f, 1.5f);
+    if (batch) {
+      tree.InsertDiscretized(cloud, origin, 20.0);
+      return;
+    }
+    octomap::Pointcloud scan;
+    for (const octomap::point3d& p : cloud) scan.push_back(p);
+    tree.insertPointCloud(scan, origin, 20.0, /*lazy_eval=*/true, /*discretize=*/true);
+    if (++frames % 50 == 0) tree.updateInnerOccupancy();
+  };
+  for (int k = 0; k < grown; ++k)
+    insert(StereoFrame(0.3 * k, 20000, 100 + static_cast<unsigned>(k)), 0.3 * k);
+  std::vector<std::vector<Eigen::Vector3d>> frames_in_hand;
+  for (int k = 0; k < 4; ++k) frames_in_hand.push_back(StereoFrame(0.3 * k, 20000, 10 + k));
+  int k = 0;
+  for (auto _ : state) {
+    insert(frames_in_hand[static_cast<std::size_t>(k % 4)], 0.3 * (k % 4));
+    ++k;
+  }
+  state.counters["leaves"] = static_cast<double>(tree.getNumLeafNodes());
+}
+BENCHMARK(BM_OctoMapInsertGrown)
+    ->ArgsProduct({{0, 600}, {0, 1}})
+    ->ArgNames({"grown", "impl"})
     ->Unit(benchmark::kMillisecond);
 
 // A tree of 12 frames of ~300k points at 0.1 m, serialised: Arg 0 OctoMap's own writers

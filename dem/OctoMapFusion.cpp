@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "dem/OcTreeBytes.hpp"
 #include "dem/QuietStderr.hpp"
@@ -37,7 +38,7 @@ void Validate(const OctoMapOptions& o) {
 OctoMapFusion::OctoMapFusion(const OctoMapOptions& options) : options_(options) {
   Validate(options_);
   if (!options_.enabled) return;
-  tree_ = std::make_unique<octomap::OcTree>(options_.resolution_m);
+  tree_ = std::make_unique<BatchOcTree>(options_.resolution_m);
   tree_->setProbHit(options_.prob_hit);
   tree_->setProbMiss(options_.prob_miss);
 }
@@ -50,40 +51,30 @@ OctoMapFrameStats OctoMapFusion::InsertFrame(const std::vector<Eigen::Vector3d>&
     stats.skipped = true;
     return stats;
   }
-  octomap::Pointcloud cloud;
-  cloud.reserve(points_world.size());
+  points_.clear();
+  points_.reserve(points_world.size());
   for (const Eigen::Vector3d& p : points_world) {
     if (!p.allFinite()) {
       ++stats.dropped_nonfinite;
       continue;
     }
-    cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                    static_cast<float>(p.z()));
+    points_.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                         static_cast<float>(p.z()));
   }
-  stats.inserted = cloud.size();
   const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
                                 static_cast<float>(sensor_origin_world.y()),
                                 static_cast<float>(sensor_origin_world.z()));
   const double max_range = options_.max_range_m > 0.0 ? options_.max_range_m : -1.0;
-  // Discretized: endpoints sharing a voxel cast one ray; lazy: inner nodes once, below.
-  tree_->insertPointCloud(cloud, origin, max_range, /*lazy_eval=*/true, /*discretize=*/true);
-  // The inner nodes (and pruning) only matter to readers, and updating them walks the whole
-  // tree: once per frame made a frame's cost grow with the map (bench_replay, 300-frame loop).
-  // Every kInnerUpdateFrames frames bounds the unpruned memory; tree() does the rest.
-  constexpr int kInnerUpdateFrames = 50;
-  inner_stale_ = true;
-  if (++frames_since_update_ >= kInnerUpdateFrames) UpdateInner();
+  const BatchCounts counts = tree_->InsertDiscretized(points_, origin, max_range);
+  stats.dropped_out_of_bounds = counts.dropped_out_of_bounds;
+  stats.inserted = points_.size() - counts.dropped_out_of_bounds;
+  stats.free_voxels = counts.free_voxels;
+  stats.occupied_voxels = counts.occupied_voxels;
   return stats;
 }
 
-void OctoMapFusion::UpdateInner() const {
-  if (tree_ && inner_stale_) tree_->updateInnerOccupancy();
-  inner_stale_ = false;
-  frames_since_update_ = 0;
-}
-
 bool OctoMapFusion::Save(std::ostream& out) const {
-  const std::int32_t schedule[2] = {frames_since_update_, inner_stale_ ? 1 : 0};
+  const std::int32_t schedule[2] = {0, 0};  // inner nodes current: nothing scheduled
   out.write(reinterpret_cast<const char*>(schedule), sizeof(schedule));
   if (tree_) {
     const std::string bytes = FullOcTreeBytes(*tree_);
@@ -96,30 +87,25 @@ void OctoMapFusion::Restore(std::istream& in) {
   std::int32_t schedule[2] = {0, 0};
   in.read(reinterpret_cast<char*>(schedule), sizeof(schedule));
   if (!in) throw std::runtime_error("OctoMap state: truncated");
-  if (options_.enabled) {
-    std::unique_ptr<octomap::AbstractOcTree> read;
-    {
-      const QuietStderr quiet;  // liboctomap reports the read on stderr
-      read.reset(octomap::AbstractOcTree::read(in));
-    }
-    auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
-    if (tree == nullptr) throw std::runtime_error("OctoMap state: not an OcTree");
-    if (tree->getResolution() != options_.resolution_m) {
-      throw std::runtime_error("OctoMap state: resolution differs from octomap.resolution_m");
-    }
-    read.release();
-    tree_.reset(tree);
-    // .ot keeps the log-odds, not the sensor model.
-    tree_->setProbHit(options_.prob_hit);
-    tree_->setProbMiss(options_.prob_miss);
+  if (!options_.enabled) return;
+  std::unique_ptr<octomap::AbstractOcTree> read;
+  {
+    const QuietStderr quiet;  // liboctomap reports the read on stderr
+    read.reset(octomap::AbstractOcTree::read(in));
   }
-  frames_since_update_ = schedule[0];
-  inner_stale_ = schedule[1] != 0;
-}
-
-const octomap::OcTree* OctoMapFusion::tree() const {
-  UpdateInner();
-  return tree_.get();
+  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+  if (tree == nullptr) throw std::runtime_error("OctoMap state: not an OcTree");
+  if (tree->getResolution() != options_.resolution_m) {
+    throw std::runtime_error("OctoMap state: resolution differs from octomap.resolution_m");
+  }
+  auto restored = std::make_unique<BatchOcTree>(options_.resolution_m);
+  restored->swapContent(*tree);  // the nodes move over; the batch tree keeps its buffers
+  // .ot keeps the log-odds, not the sensor model.
+  restored->setProbHit(options_.prob_hit);
+  restored->setProbMiss(options_.prob_miss);
+  // A state saved with stale inner nodes (earlier versions): the walk assumes current ones.
+  if (schedule[1] != 0) restored->updateInnerOccupancy();
+  tree_ = std::move(restored);
 }
 
 }  // namespace rovermap::dem

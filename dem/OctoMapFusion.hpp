@@ -10,20 +10,25 @@
 #include <memory>
 #include <vector>
 
+#include "dem/BatchOcTree.hpp"
 #include "dem/OctoMapOptions.hpp"
 
 namespace rovermap::dem {
 
 /// What InsertFrame did.
 struct OctoMapFrameStats {
-  std::size_t points = 0;             ///< points given
-  std::size_t inserted = 0;           ///< finite points passed to the tree
-  std::size_t dropped_nonfinite = 0;  ///< NaN/inf points (never inserted)
-  bool skipped = false;               ///< disabled, or the sensor origin was not finite
+  std::size_t points = 0;                 ///< points given
+  std::size_t inserted = 0;               ///< finite points passed to the tree
+  std::size_t dropped_nonfinite = 0;      ///< NaN/inf points (never inserted)
+  std::size_t dropped_out_of_bounds = 0;  ///< beyond the tree's keys (±3276.8 m at 0.1 m)
+  std::size_t free_voxels = 0;            ///< voxels updated as free
+  std::size_t occupied_voxels = 0;        ///< voxels updated as occupied
+  bool skipped = false;                   ///< disabled, or the sensor origin was not finite
 };
 
-/// One OcTree fed frame by frame: discretized, lazily evaluated insertion (each voxel updated
-/// once per frame); the inner occupancy is updated every 50 frames and when the tree is read.
+/// One OcTree fed frame by frame: discretized insertion (each voxel updated once per frame),
+/// as OctoMap's insertPointCloud does it, in one ordered pass (dem::BatchOcTree) whose cost
+/// does not grow with the tree; the inner occupancy is kept current on the touched paths.
 class OctoMapFusion {
  public:
   /// @throw std::invalid_argument if `options` are invalid.
@@ -36,26 +41,24 @@ class OctoMapFusion {
   OctoMapFrameStats InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
                                 const Eigen::Vector3d& sensor_origin_world);
 
-  /// The tree with its inner nodes up to date (brought up to date here, not per frame);
-  /// nullptr when disabled. Not thread-safe against InsertFrame.
-  const octomap::OcTree* tree() const;
+  /// The tree, inner nodes up to date; nullptr when disabled. Not thread-safe against
+  /// InsertFrame.
+  const octomap::OcTree* tree() const { return tree_.get(); }
 
-  /// The whole state for a checkpoint (mapper/Checkpoint): the tree with its log-odds as they
-  /// are (OctoMap's .ot format, inner nodes not brought up to date, so that a restored map goes
-  /// on exactly as this one would) and the inner-update schedule. Nothing when disabled.
+  /// The whole state for a checkpoint (mapper/Checkpoint): the tree with its log-odds (OctoMap's
+  /// .ot format), after two words that earlier versions used for an inner-update schedule and
+  /// that are now zero. Nothing when disabled.
   /// @return false if the stream failed.
   bool Save(std::ostream& out) const;
-  /// Replaces the state by one Save wrote with the same options.
+  /// Replaces the state by one Save wrote with the same options (or an earlier version, whose
+  /// stale inner nodes are brought up to date here).
   /// @throw std::runtime_error if the data are not such a state.
   void Restore(std::istream& in);
 
  private:
   OctoMapOptions options_;
-  void UpdateInner() const;
-
-  std::unique_ptr<octomap::OcTree> tree_;
-  mutable bool inner_stale_ = false;
-  mutable int frames_since_update_ = 0;
+  std::unique_ptr<BatchOcTree> tree_;
+  std::vector<octomap::point3d> points_;  // the frame's finite points, reused
 };
 
 }  // namespace rovermap::dem

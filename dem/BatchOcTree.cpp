@@ -1,0 +1,204 @@
+#include "dem/BatchOcTree.hpp"
+
+#include <algorithm>
+#include <array>
+#include <utility>
+
+namespace rovermap::dem {
+namespace {
+
+constexpr unsigned kDepth = 16;  // octomap::OcTree: 16 levels, 16-bit keys
+
+// The 16 bits of `x` spread to every third bit.
+std::uint64_t Spread(std::uint64_t x) {
+  x = (x | x << 16) & 0x0000FF0000FFULL;
+  x = (x | x << 8) & 0x00F00F00F00FULL;
+  x = (x | x << 4) & 0x0C30C30C30C3ULL;
+  return (x | x << 2) & 0x249249249249ULL;
+}
+
+std::uint16_t Compact(std::uint64_t x) {
+  x &= 0x249249249249ULL;
+  x = (x | x >> 2) & 0x0C30C30C30C3ULL;
+  x = (x | x >> 4) & 0x00F00F00F00FULL;
+  x = (x | x >> 8) & 0x0000FF0000FFULL;
+  return static_cast<std::uint16_t>((x | x >> 16) & 0xFFFFULL);
+}
+
+std::uint64_t Morton(const octomap::OcTreeKey& k) {
+  return Spread(k.k[0]) | Spread(k.k[1]) << 1 | Spread(k.k[2]) << 2;
+}
+
+octomap::OcTreeKey FromMorton(std::uint64_t m) {
+  return octomap::OcTreeKey(Compact(m), Compact(m >> 1), Compact(m >> 2));
+}
+
+// The child index below `depth` (0 = root) on the way to `m`: OctoMap's computeChildIdx.
+unsigned ChildIndex(std::uint64_t m, unsigned depth) {
+  return static_cast<unsigned>(m >> (3 * (kDepth - 1 - depth))) & 7U;
+}
+
+// The deepest node two distinct keys' paths share.
+unsigned CommonDepth(std::uint64_t a, std::uint64_t b) {
+  const unsigned highest_bit = 63U - static_cast<unsigned>(__builtin_clzll(a ^ b));
+  return kDepth - 1 - highest_bit / 3;
+}
+
+// Ascending LSD radix sort of 48-bit codes, four 12-bit digits.
+void RadixSort48(std::vector<std::uint64_t>* v, std::vector<std::uint64_t>* scratch) {
+  constexpr unsigned kBits = 12, kBuckets = 1U << kBits;
+  scratch->resize(v->size());
+  std::array<std::size_t, kBuckets> start{};
+  for (unsigned shift = 0; shift < 48; shift += kBits) {
+    start.fill(0);
+    for (const std::uint64_t x : *v) ++start[(x >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& s : start) sum += std::exchange(s, sum);
+    for (const std::uint64_t x : *v) (*scratch)[start[(x >> shift) & (kBuckets - 1)]++] = x;
+    v->swap(*scratch);
+  }
+}
+
+void SortUnique(std::vector<std::uint64_t>* v, std::vector<std::uint64_t>* scratch) {
+  RadixSort48(v, scratch);
+  v->erase(std::unique(v->begin(), v->end()), v->end());
+}
+
+constexpr unsigned kRecentBits = 16;  // 64k entries, 512 kB: rays from one origin overlap
+
+}  // namespace
+
+BatchOcTree::BatchOcTree(double resolution) : octomap::OcTree(resolution) {}
+
+void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d& end) {
+  octomap::OcTreeKey end_key;
+  if (!coordToKeyChecked(end, end_key)) return;  // computeRayKeys would print and fail
+  if (!computeRayKeys(origin, end, ray_)) return;
+  for (const octomap::OcTreeKey& key : ray_) {
+    const std::uint64_t code = Morton(key);
+    // Most of a ray's voxels near the origin were just added by its neighbours: a lossy
+    // filter drops those repeats before the sort, which removes the rest.
+    const std::size_t slot = (code * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits);
+    if (recent_[slot] == code + 1) continue;
+    recent_[slot] = code + 1;
+    free_.push_back(code);
+  }
+}
+
+BatchCounts BatchOcTree::InsertDiscretized(const std::vector<octomap::point3d>& points,
+                                           const octomap::point3d& origin, double max_range) {
+  BatchCounts counts;
+  endpoints_.clear();
+  free_.clear();
+  updates_.clear();
+  recent_.assign(std::size_t{1} << kRecentBits, 0);
+  for (const octomap::point3d& p : points) {
+    octomap::OcTreeKey key;
+    if (coordToKeyChecked(p, key))
+      endpoints_.push_back(Morton(key));
+    else
+      ++counts.dropped_out_of_bounds;
+  }
+  SortUnique(&endpoints_, &scratch_);
+  counts.endpoints = endpoints_.size();
+  octomap::OcTreeKey origin_key;
+  const bool origin_in_bounds = coordToKeyChecked(origin, origin_key);
+  // OccupancyOcTreeBase::computeDiscreteUpdate and computeUpdate, expression for expression
+  // (the same floats decide the range test and the truncated end).
+  std::vector<std::uint64_t>& occupied = scratch_;  // endpoints_ stays sorted: reuse its order
+  occupied.clear();
+  for (const std::uint64_t code : endpoints_) {
+    const octomap::point3d p = keyToCoord(FromMorton(code));
+    if (max_range < 0.0 || (p - origin).norm() <= max_range) {
+      if (origin_in_bounds) CastRay(origin, p);
+      octomap::OcTreeKey key;
+      if (coordToKeyChecked(p, key)) occupied.push_back(Morton(key));
+    } else if (origin_in_bounds) {
+      const octomap::point3d direction = (p - origin).normalized();
+      CastRay(origin, origin + direction * static_cast<float>(max_range));
+    }
+  }
+  endpoints_.swap(occupied);  // endpoints_ now holds the occupied voxels
+  const auto not_ascending = [](std::uint64_t a, std::uint64_t b) { return a >= b; };
+  if (std::adjacent_find(endpoints_.begin(), endpoints_.end(), not_ascending) != endpoints_.end())
+    SortUnique(&endpoints_, &scratch_);  // a centre keyed to another voxel (huge coordinates)
+  SortUnique(&free_, &scratch_);
+  // Merge: an endpoint wins over free space in the same frame.
+  updates_.reserve(free_.size() + endpoints_.size());
+  auto f = free_.begin();
+  for (const std::uint64_t code : endpoints_) {
+    for (; f != free_.end() && *f < code; ++f) updates_.push_back(*f << 1);
+    if (f != free_.end() && *f == code) ++f;
+    updates_.push_back(code << 1 | 1U);
+  }
+  for (; f != free_.end(); ++f) updates_.push_back(*f << 1);
+  counts.occupied_voxels = endpoints_.size();
+  counts.free_voxels = updates_.size() - endpoints_.size();
+  Apply();
+  return counts;
+}
+
+// updateNode(key, occupied, lazy_eval = true) for every update in depth-first order, each
+// descent starting from the deepest node shared with the previous key's path; an inner node is
+// set to its children's maximum (updateInnerOccupancy) once the walk leaves it.
+void BatchOcTree::Apply() {
+  if (updates_.empty()) return;
+  std::array<octomap::OcTreeNode*, kDepth + 1> path{};
+  const auto close_to = [this, &path](unsigned end, unsigned depth) {
+    for (unsigned d = end; d-- > depth + 1;)
+      if (nodeHasChildren(path[d])) path[d]->updateOccupancyChildren();
+  };
+  bool root_created = false;
+  if (root == nullptr) {
+    root = new octomap::OcTreeNode();
+    ++tree_size;
+    root_created = true;
+  }
+  path[0] = root;
+  unsigned reached = 0;  // depth of the last node on the previous path
+  std::uint64_t previous = 0;
+  for (std::size_t i = 0; i < updates_.size(); ++i) {
+    const std::uint64_t code = updates_[i] >> 1;
+    const float log_odds = (updates_[i] & 1U) != 0 ? prob_hit_log : prob_miss_log;
+    unsigned depth = 0;
+    if (i > 0) {
+      depth = std::min(CommonDepth(code, previous), reached);
+      close_to(reached + 1, depth);
+    }
+    previous = code;
+    // updateNode's early abort: a leaf, or a pruned node, already clamped this way.
+    const auto clamped = [&](const octomap::OcTreeNode* node) {
+      return (log_odds >= 0 && node->getLogOdds() >= clamping_thres_max) ||
+             (log_odds <= 0 && node->getLogOdds() <= clamping_thres_min);
+    };
+    octomap::OcTreeNode* node = path[depth];
+    bool just_created = i == 0 && root_created;
+    bool aborted = false;
+    // updateNodeRecurs, iteratively.
+    for (; depth < kDepth; ++depth) {
+      const unsigned child = ChildIndex(code, depth);
+      bool created = false;
+      if (!nodeChildExists(node, child)) {
+        if (!nodeHasChildren(node) && !just_created) {  // a pruned node
+          if (clamped(node)) {
+            aborted = true;
+            break;
+          }
+          expandNode(node);
+        } else {
+          createNodeChild(node, child);
+          created = true;
+        }
+      }
+      node = getNodeChild(node, child);
+      path[depth + 1] = node;
+      just_created = created;
+    }
+    reached = depth;
+    if (!aborted && (just_created || !clamped(node))) updateNodeLogOdds(node, log_odds);
+  }
+  close_to(reached + 1, 0);
+  if (nodeHasChildren(root)) root->updateOccupancyChildren();
+}
+
+}  // namespace rovermap::dem
