@@ -265,14 +265,16 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   const double max_h = options_.max_horizontal_sigma_cells * options_.cell_size_m;
   const bool limit_h = use_cov && options_.max_horizontal_sigma_cells > 0.0;
 
-  // Pass 1: each point's cell and height variance, or why it is dropped.
+  // Pass 1: each point's cell and height variance, or why it is dropped. The cells go in their
+  // own array, which CountPerCell takes as it is.
   struct Fusable {
     std::size_t k;
-    CellIndex cell;
     double r;
   };
   std::vector<Fusable> fusable;
+  std::vector<CellIndex> cells;
   fusable.reserve(n);
+  cells.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector3d& p = points_world[k];
     if (limit_h) {
@@ -305,20 +307,17 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       ++stats.dropped_nonfinite;
       continue;
     }
-    fusable.push_back({k, *cell, std::max(r, options_.min_point_variance_m2)});
+    fusable.push_back({k, std::max(r, options_.min_point_variance_m2)});
+    cells.push_back(*cell);
   }
 
   // Pass 2: fuse; with frame_points_correlated the frame's points in a cell weigh as one.
-  std::vector<std::uint32_t> counts;
-  if (options_.frame_points_correlated) {
-    std::vector<CellIndex> cells(fusable.size());
-    for (std::size_t i = 0; i < fusable.size(); ++i) cells[i] = fusable[i].cell;
-    counts = CountPerCell(cells);
-  }
+  const std::vector<std::uint32_t> counts =
+      options_.frame_points_correlated ? CountPerCell(cells) : std::vector<std::uint32_t>();
   for (std::size_t i = 0; i < fusable.size(); ++i) {
     const Fusable& f = fusable[i];
     const double m = counts.empty() ? 1.0 : static_cast<double>(counts[i]);
-    FuseAt(f.cell, points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats);
+    FuseAt(cells[i], points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats);
   }
   return stats;
 }
