@@ -21,6 +21,9 @@ class VoxelGrid {
   /// Integer coordinates of the cell holding `p` (clamped to the int32 range).
   Eigen::Vector3i Cell(const Eigen::Vector3d& p) const;
 
+  /// Makes room for `cells` cells in all without growing again (never shrinks).
+  void Reserve(std::size_t cells);
+
   std::size_t size() const { return cells_; }
   double edge() const { return edge_; }
 
@@ -32,6 +35,7 @@ class VoxelGrid {
   static constexpr std::uint32_t kEmpty = 0xffffffffu;
 
   void Grow();
+  void Rehash(std::size_t table_size);
 
   double edge_;
   std::vector<Slot> table_;  // power-of-two size, at most half full

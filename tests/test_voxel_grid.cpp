@@ -49,6 +49,20 @@ TEST(VoxelGrid, IdsAreDenseInFirstTouchOrderAndStable) {
   EXPECT_EQ(grid.size(), expected.size());
 }
 
+TEST(VoxelGrid, ReserveKeepsTheIdsAndNeverShrinks) {
+  const Points pts = RandomPoints(5000, 3.0, 2);
+  VoxelGrid grid(0.25, 1);
+  std::map<CellKey, std::size_t> expected;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (i == 1000) grid.Reserve(50000);  // mid-way, far above what is needed
+    if (i == 3000) grid.Reserve(1);      // below the current size: no change
+    const auto [it, inserted] = expected.emplace(Key(pts[i], 0.25), expected.size());
+    EXPECT_EQ(grid.Insert(pts[i]), it->second);
+  }
+  EXPECT_EQ(grid.size(), expected.size());
+  for (const auto& p : pts) EXPECT_EQ(grid.Insert(p), expected.at(Key(p, 0.25)));
+}
+
 TEST(VoxelGrid, CellsOnBothSidesOfZeroAndFarAway) {
   const VoxelGrid grid(0.5, 8);
   EXPECT_EQ(grid.Cell(Eigen::Vector3d(0.1, -0.1, 0.5)), Eigen::Vector3i(0, -1, 1));
