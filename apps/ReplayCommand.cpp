@@ -17,6 +17,7 @@
 #include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/Outputs.hpp"
+#include "mapper/ReadAhead.hpp"
 
 namespace rovermap::apps {
 namespace {
@@ -133,23 +134,24 @@ int RunReplay(const ReplayArgs& args) {
   }
 
   Progress progress(reader.frame_count());
-  for (std::size_t k = 0; k < reader.frame_count(); ++k) {
-    const auto load_start = Clock::now();
-    io::Frame frame;
-    try {
-      reader.Next(&frame);
-    } catch (const io::IoError& e) {
+  // Frame k+1 is read and prepared (stereo, index, outlier flags) while frame k is registered
+  // and fused: on the 2-core machine that fills the cores the matcher leaves idle.
+  mapper::ReadAhead ahead(&reader, mapper.get());
+  mapper::ReadAhead::Item item;
+  while (ahead.Next(&item)) {
+    if (!item.frame) {
       // An unreadable frame never aborts a replay: dead reckoning carries the pose over it.
-      const io::StampedPose& odom = reader.odometry()[k];
+      const io::StampedPose& odom = reader.odometry()[item.index];
       std::optional<Eigen::Isometry3d> truth;
-      if (reader.has_groundtruth()) truth = reader.groundtruth()[k].T_world_body;
-      const mapper::FrameResult r = mapper->SkipFrame(
-          k, odom.timestamp, odom.T_world_body, mapper::FallbackReason::kBadFrame, e.what(), truth);
+      if (reader.has_groundtruth()) truth = reader.groundtruth()[item.index].T_world_body;
+      const mapper::FrameResult r =
+          mapper->SkipFrame(item.index, odom.timestamp, odom.T_world_body,
+                            mapper::FallbackReason::kBadFrame, item.error, truth);
       progress.Frame(r, MsSince(start));
       continue;
     }
-    const double load_ms = MsSince(load_start);
-    const mapper::FrameResult r = mapper->ProcessFrame(frame, load_ms);
+    const mapper::FrameResult r =
+        mapper->ProcessPrepared(*item.frame, std::move(item.prepared), item.load_ms);
     progress.Frame(r, MsSince(start));
   }
   progress.Done();

@@ -20,6 +20,7 @@
 #include "config/Config.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/ReadAhead.hpp"
 #include "sim/Simulator.hpp"
 
 namespace fs = std::filesystem;
@@ -76,23 +77,36 @@ MemorySplit SplitMemory(const mapper::Mapper& mapper) {
   return m;
 }
 
-// Replays `sequence` as replay does (read, then ProcessFrame), timing every frame; `splits`,
-// when given, gets the memory split after frame `split_after` and at the end.
+// Replays `sequence` as replay does (frame k+1 read and prepared by mapper::ReadAhead while
+// frame k is processed), timing every frame; `splits`, when given, gets the memory split after
+// frame `split_after` and at the end. `read_ahead` false: read, then ProcessFrame, one by one.
 std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptions& options,
                            double* wall_ms, std::vector<MemorySplit>* splits = nullptr,
-                           std::size_t split_after = 0) {
+                           std::size_t split_after = 0, bool read_ahead = true) {
   io::SequenceReader reader(sequence);
   mapper::Mapper mapper(reader.info(), options);
   std::vector<FrameCost> costs;
   const auto start = Clock::now();
-  io::Frame frame;
-  for (;;) {
-    const auto t0 = Clock::now();
-    if (!reader.Next(&frame)) break;
-    const double load_ms = MsSince(t0);
-    const mapper::FrameResult r = mapper.ProcessFrame(frame, load_ms);
+  auto t0 = Clock::now();
+  auto record = [&](const mapper::FrameResult& r) {
     costs.push_back({MsSince(t0), RssMb(), r.time});
     if (splits != nullptr && costs.size() == split_after) splits->push_back(SplitMemory(mapper));
+    t0 = Clock::now();
+  };
+  if (read_ahead) {
+    mapper::ReadAhead ahead(&reader, &mapper);
+    mapper::ReadAhead::Item item;
+    while (ahead.Next(&item)) {
+      if (!item.frame) throw std::runtime_error(item.error);  // simulated: never unreadable
+      record(mapper.ProcessPrepared(*item.frame, std::move(item.prepared), item.load_ms));
+    }
+  } else {
+    io::Frame frame;
+    for (;;) {
+      const auto load_start = Clock::now();
+      if (!reader.Next(&frame)) break;
+      record(mapper.ProcessFrame(frame, MsSince(load_start)));
+    }
   }
   *wall_ms = MsSince(start);
   if (splits != nullptr) splits->push_back(SplitMemory(mapper));
@@ -172,14 +186,20 @@ int main(int argc, char** argv) {
   sim::SimOptions stereo;
   stereo.frames = frames;
   double wall = 0.0;
-  auto costs = Run(Simulate(scratch / "stereo", stereo), options, &wall);
+  const fs::path stereo_dir = Simulate(scratch / "stereo", stereo);
+  auto costs = Run(stereo_dir, options, &wall);
   PrintRow("sim stereo 480x360", costs, wall);
+  costs = Run(stereo_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
+  PrintRow("  the same, frames one by one", costs, wall);
 
   sim::SimOptions cloud = stereo;
   cloud.sensor = sim::SensorKind::kCloud;
   cloud.cloud_stride_px = 3;  // about 19k points a frame
-  costs = Run(Simulate(scratch / "cloud", cloud), options, &wall);
+  const fs::path cloud_dir = Simulate(scratch / "cloud", cloud);
+  costs = Run(cloud_dir, options, &wall);
   PrintRow("sim cloud (stride 3)", costs, wall);
+  costs = Run(cloud_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
+  PrintRow("  the same, frames one by one", costs, wall);
 
   if (!kitti.empty()) {
     costs = Run(kitti, options, &wall);

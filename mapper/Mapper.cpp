@@ -86,16 +86,41 @@ Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
 }
 
 FrameResult Mapper::ProcessFrame(const io::Frame& frame, double load_ms) {
-  return ProcessLoaded(frame, LoadFrame(frame, sensor_, options_.mapper.min_points), load_ms);
+  return ProcessPrepared(frame, Prepare(frame), load_ms);
 }
 
 FrameResult Mapper::ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, double load_ms) {
-  return Process(frame, std::move(loaded), load_ms, nullptr);
+  return ProcessPrepared(frame, Prepare(std::move(loaded)), load_ms);
 }
 
-FrameResult Mapper::Process(const io::Frame& frame, LoadedFrame loaded, double load_ms,
+FrameResult Mapper::ProcessPrepared(const io::Frame& frame, PreparedFrame prepared,
+                                    double load_ms) {
+  return Process(frame, std::move(prepared), load_ms, nullptr);
+}
+
+PreparedFrame Mapper::Prepare(const io::Frame& frame) const {
+  return Prepare(LoadFrame(frame, sensor_, options_.mapper.min_points));
+}
+
+PreparedFrame Mapper::Prepare(LoadedFrame loaded) const {
+  PreparedFrame p;
+  p.loaded = std::move(loaded);
+  if (!p.loaded.ok) return p;
+  // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones (§9a).
+  const auto start = Clock::now();
+  p.source = std::make_unique<registration::IndexedCloud>(std::move(p.loaded.cloud),
+                                                          options_.registration);
+  p.isolated = FindIsolatedPoints(
+      p.source->cloud().points, p.source->tree(), sensor_.T_body_sensor.translation(),
+      options_.mapper.outlier_radius_factor, options_.mapper.outlier_min_neighbors);
+  p.prepare_ms = MsSince(start);
+  return p;
+}
+
+FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, double load_ms,
                             const FrameResult* recorded) {
   const auto start = Clock::now();
+  const LoadedFrame& loaded = prepared.loaded;
   if (!loaded.ok) {
     SkipFrame(frame.index, frame.timestamp, frame.T_world_body_odom, FallbackReason::kBadFrame,
               loaded.reason, frame.T_world_body_truth);
@@ -106,17 +131,10 @@ FrameResult Mapper::Process(const io::Frame& frame, LoadedFrame loaded, double l
     bad.dropped_nonfinite = loaded.dropped_nonfinite;
     return bad;
   }
-  FrameResult r = Begin(frame, loaded, load_ms);
-
-  // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones (§9a).
-  auto prepare_start = Clock::now();
-  auto source =
-      std::make_unique<registration::IndexedCloud>(std::move(loaded.cloud), options_.registration);
-  const OutlierMask isolated = FindIsolatedPoints(
-      source->cloud().points, source->tree(), sensor_.T_body_sensor.translation(),
-      options_.mapper.outlier_radius_factor, options_.mapper.outlier_min_neighbors);
-  r.outliers_removed = isolated.removed;
-  r.time.prepare_ms = MsSince(prepare_start);
+  FrameResult r = Begin(frame, prepared, load_ms);
+  // 1. Load and prepare: done by Prepare, maybe on another thread while the last frame ran.
+  std::unique_ptr<registration::IndexedCloud> source = std::move(prepared.source);
+  const OutlierMask& isolated = prepared.isolated;
 
   // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction
   // (or, re-applying a journalled frame, what that gave).
@@ -134,20 +152,22 @@ FrameResult Mapper::Process(const io::Frame& frame, LoadedFrame loaded, double l
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
   KeepAsReference(std::move(source), r.step, r.reference_distance_m);
-  r.time.total_ms = loaded.stereo_ms + MsSince(start);
+  r.time.total_ms = loaded.stereo_ms + prepared.prepare_ms + MsSince(start);
   results_.push_back(r);
   return r;
 }
 
-FrameResult Mapper::Begin(const io::Frame& frame, const LoadedFrame& loaded, double load_ms) {
+FrameResult Mapper::Begin(const io::Frame& frame, const PreparedFrame& prepared, double load_ms) {
   FrameResult r;
   r.index = frame.index;
   r.timestamp = frame.timestamp;
   r.T_world_body_truth = frame.T_world_body_truth;
-  r.points = loaded.cloud.size();
-  r.dropped_nonfinite = loaded.dropped_nonfinite;
+  r.points = prepared.source->cloud().size();
+  r.dropped_nonfinite = prepared.loaded.dropped_nonfinite;
+  r.outliers_removed = prepared.isolated.removed;
   r.time.load_ms = load_ms;
-  r.time.stereo_ms = loaded.stereo_ms;
+  r.time.stereo_ms = prepared.loaded.stereo_ms;
+  r.time.prepare_ms = prepared.prepare_ms;
   return r;
 }
 
@@ -205,9 +225,11 @@ FrameResult Mapper::Reapply(const FrameResult& recorded, const io::Frame* frame)
     if (frame == nullptr || frame->index != recorded.index) {
       throw ReapplyError(where + "its files are needed to re-apply it");
     }
-    LoadedFrame loaded = LoadFrame(*frame, sensor_, options_.mapper.min_points);
-    if (!loaded.ok) throw ReapplyError(where + "could be read before, not now: " + loaded.reason);
-    Process(*frame, std::move(loaded), 0.0, &recorded);
+    PreparedFrame prepared = Prepare(*frame);
+    if (!prepared.loaded.ok) {
+      throw ReapplyError(where + "could be read before, not now: " + prepared.loaded.reason);
+    }
+    Process(*frame, std::move(prepared), 0.0, &recorded);
   }
   // Re-applied, the chain must land on the very pose it reached the first time.
   const ChainStep& now = results_.back().step;

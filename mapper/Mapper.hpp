@@ -22,6 +22,7 @@
 #include "mapper/LocalMap.hpp"
 #include "mapper/MapperOptions.hpp"
 #include "mapper/OctoMapWorker.hpp"
+#include "mapper/OutlierFilter.hpp"
 #include "mapper/PoseChain.hpp"
 #include "registration/Icp.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -90,6 +91,15 @@ struct FrameResult {
   double reference_distance_m = 0.0;
 };
 
+/// Step 1's outcome: a frame's points loaded, indexed (tree built) and their isolated points
+/// flagged. It depends on the frame alone, so it can be made while an earlier frame is processed.
+struct PreparedFrame {
+  LoadedFrame loaded;  ///< ok, reason and counts; its cloud is moved into `source` when ok
+  std::unique_ptr<registration::IndexedCloud> source;  ///< null when !loaded.ok
+  OutlierMask isolated;
+  double prepare_ms = 0.0;  ///< indexing and the outlier search
+};
+
 /// A journalled frame that does not re-apply to the state it is given (another configuration,
 /// changed input files).
 class ReapplyError : public std::runtime_error {
@@ -115,6 +125,14 @@ class Mapper {
   /// The same with the points already loaded (LoadFrame is thread-safe, so a caller may load the
   /// next frame while this one is registered). `frame`'s images / cloud are not read.
   FrameResult ProcessLoaded(const io::Frame& frame, LoadedFrame loaded, double load_ms = 0.0);
+
+  /// Step 1 alone: LoadFrame, then the index and the outlier flags. Reads only the sensor and
+  /// the options, so it may run on another thread while this mapper processes an earlier frame
+  /// (ReadAhead does). Never throws on data.
+  PreparedFrame Prepare(const io::Frame& frame) const;
+  PreparedFrame Prepare(LoadedFrame loaded) const;
+  /// Steps 2-8 for a frame made by Prepare.
+  FrameResult ProcessPrepared(const io::Frame& frame, PreparedFrame prepared, double load_ms = 0.0);
 
   /// A frame that could not be read (or never arrived): its pose is the dead-reckoning
   /// prediction from `T_world_body_odom`, nothing is fused, and the next frame registers onto
@@ -151,10 +169,10 @@ class Mapper {
  private:
   struct Registered;               // the outcome of register + judge + blend
   friend struct CheckpointAccess;  // mapper/Checkpoint: the state to and from disk
-  FrameResult Process(const io::Frame& frame, LoadedFrame loaded, double load_ms,
+  FrameResult Process(const io::Frame& frame, PreparedFrame prepared, double load_ms,
                       const FrameResult* recorded);
   static Registered Recorded(const FrameResult& recorded);
-  static FrameResult Begin(const io::Frame& frame, const LoadedFrame& loaded, double load_ms);
+  static FrameResult Begin(const io::Frame& frame, const PreparedFrame& prepared, double load_ms);
   static void Report(const Registered& reg, FrameResult* result);
   Registered RegisterOntoReference(const registration::IndexedCloud& source,
                                    const Eigen::Isometry3d& T_world_body_odom);

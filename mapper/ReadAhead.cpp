@@ -1,0 +1,49 @@
+#include "mapper/ReadAhead.hpp"
+
+#include <chrono>
+#include <utility>
+
+#include "io/IoError.hpp"
+
+namespace rovermap::mapper {
+
+ReadAhead::ReadAhead(io::SequenceReader* reader, const Mapper* mapper)
+    : reader_(reader), mapper_(mapper), next_(reader->next_index()) {
+  if (next_ < reader_->frame_count()) {
+    pending_ = std::async(std::launch::async, &ReadAhead::Fetch, this, next_);
+  }
+}
+
+ReadAhead::~ReadAhead() {
+  if (pending_.valid()) pending_.wait();
+}
+
+ReadAhead::Item ReadAhead::Fetch(std::size_t index) {
+  Item item;
+  item.index = index;
+  const auto start = std::chrono::steady_clock::now();
+  io::Frame frame;
+  try {
+    reader_->Next(&frame);
+  } catch (const io::IoError& e) {
+    item.error = e.what();  // the reader has moved past it
+    return item;
+  }
+  item.load_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  item.prepared = mapper_->Prepare(frame);
+  item.frame = std::move(frame);
+  return item;
+}
+
+bool ReadAhead::Next(Item* item) {
+  if (!pending_.valid()) return false;
+  *item = pending_.get();  // rethrows what Fetch threw
+  ++next_;
+  if (next_ < reader_->frame_count()) {
+    pending_ = std::async(std::launch::async, &ReadAhead::Fetch, this, next_);
+  }
+  return true;
+}
+
+}  // namespace rovermap::mapper

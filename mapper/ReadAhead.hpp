@@ -1,0 +1,49 @@
+#pragma once
+// Reading and step 1 of frame k+1 beside steps 2-8 of frame k (DESIGN §9: "overlap loading /
+// stereo of frame k+1 with registration and fusion of frame k"). One frame ahead only, so
+// memory stays flat.
+
+#include <cstddef>
+#include <future>
+#include <optional>
+#include <string>
+
+#include "io/Sequence.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+/// Reads the frames of `reader` in order and prepares each with `mapper.Prepare` on a thread
+/// of its own, one frame ahead of the caller. Both must outlive it; the caller must not use
+/// `reader` meanwhile. Mapper::Prepare reads only what ProcessPrepared never changes, so the
+/// caller may process frame k while frame k+1 is prepared.
+class ReadAhead {
+ public:
+  struct Item {
+    std::size_t index = 0;
+    std::optional<io::Frame> frame;  ///< nullopt: its files could not be read (`error` says why)
+    std::string error;
+    PreparedFrame prepared;  ///< made from `frame`
+    double load_ms = 0.0;    ///< reading the files
+  };
+
+  ReadAhead(io::SequenceReader* reader, const Mapper* mapper);
+  ReadAhead(const ReadAhead&) = delete;
+  ReadAhead& operator=(const ReadAhead&) = delete;
+  /// Waits for the frame in flight, if any.
+  ~ReadAhead();
+
+  /// The next frame, and starts preparing the one after. False after the last frame.
+  /// Rethrows what reading threw other than io::IoError (which becomes `error`).
+  bool Next(Item* item);
+
+ private:
+  Item Fetch(std::size_t index);
+
+  io::SequenceReader* reader_;
+  const Mapper* mapper_;
+  std::size_t next_ = 0;
+  std::future<Item> pending_;
+};
+
+}  // namespace rovermap::mapper
