@@ -7,6 +7,7 @@
 // 500 frames): per-frame cost and resident memory over its first and last tenth, so that growth
 // with the sequence's length shows. With --kitti DIR, also the real KITTI excerpt
 // (datasets/kitti_stereo51). Frames are read from disk, as replay does; outputs are not written.
+#include <malloc.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -56,6 +57,8 @@ struct MemorySplit {
   double dem_mb = 0.0;      // ElevationMap::MemoryBytes: the tiles' layers
   double octomap_mb = 0.0;  // OcTree::memoryUsage: nodes and child arrays
   double results_mb = 0.0;  // the FrameResult per frame that replay and serve keep for the report
+  double heap_used_mb = 0.0;  // mallinfo2: bytes in use in malloc's arenas (all threads)
+  double heap_free_mb = 0.0;  // free in the arenas, not returned to the system
   std::size_t dem_cells = 0;
   std::size_t octomap_leaves = 0;
   double rest_mb() const { return rss_mb - dem_mb - octomap_mb - results_mb; }
@@ -73,16 +76,20 @@ MemorySplit SplitMemory(const mapper::Mapper& mapper) {
   }
   m.results_mb =
       static_cast<double>(mapper.results().capacity() * sizeof(mapper::FrameResult)) / kMb;
+  const struct mallinfo2 heap = mallinfo2();
+  m.heap_used_mb = static_cast<double>(heap.uordblks + heap.hblkhd) / kMb;
+  m.heap_free_mb = static_cast<double>(heap.fordblks) / kMb;
   m.rss_mb = RssMb();
   return m;
 }
 
 // Replays `sequence` as replay does (frame k+1 read and prepared by mapper::ReadAhead while
 // frame k is processed), timing every frame; `splits`, when given, gets the memory split after
-// frame `split_after` and at the end. `read_ahead` false: read, then ProcessFrame, one by one.
+// every `split_every` frames and at the end. `read_ahead` false: read, then ProcessFrame, one
+// by one.
 std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptions& options,
                            double* wall_ms, std::vector<MemorySplit>* splits = nullptr,
-                           std::size_t split_after = 0, bool read_ahead = true) {
+                           std::size_t split_every = 0, bool read_ahead = true) {
   io::SequenceReader reader(sequence);
   mapper::Mapper mapper(reader.info(), options);
   std::vector<FrameCost> costs;
@@ -90,7 +97,8 @@ std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptio
   auto t0 = Clock::now();
   auto record = [&](const mapper::FrameResult& r) {
     costs.push_back({MsSince(t0), RssMb(), r.time});
-    if (splits != nullptr && costs.size() == split_after) splits->push_back(SplitMemory(mapper));
+    if (splits != nullptr && split_every > 0 && costs.size() % split_every == 0)
+      splits->push_back(SplitMemory(mapper));
     t0 = Clock::now();
   };
   if (read_ahead) {
@@ -109,7 +117,8 @@ std::vector<FrameCost> Run(const fs::path& sequence, const mapper::PipelineOptio
     }
   }
   *wall_ms = MsSince(start);
-  if (splits != nullptr) splits->push_back(SplitMemory(mapper));
+  if (splits != nullptr && (splits->empty() || splits->back().frames != costs.size()))
+    splits->push_back(SplitMemory(mapper));
   return costs;
 }
 
@@ -147,6 +156,9 @@ int main(int argc, char** argv) {
   int long_frames = 500;
   std::string kitti;
   bool octomap = true;
+  bool long_only = false;    // skip the short sequences
+  bool exact_poses = false;  // the long loop without odometry errors, increments from odometry
+  int split_every = 250;     // memory split every N frames of the long loop (a lap)
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
@@ -158,13 +170,20 @@ int main(int argc, char** argv) {
         kitti = bench::OptionValue(argc, argv, &i);
       else if (arg == "--no-octomap")
         octomap = false;
+      else if (arg == "--long-only")
+        long_only = true;
+      else if (arg == "--exact-poses")
+        exact_poses = true;
+      else if (arg == "--split-every")
+        split_every = std::stoi(bench::OptionValue(argc, argv, &i));
       else
         throw std::invalid_argument("unknown option " + arg);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr,
                  "bench_replay: %s\nusage: bench_replay [--frames N] [--long N] "
-                 "[--kitti DIR] [--no-octomap]\n",
+                 "[--kitti DIR] [--no-octomap] [--long-only] [--exact-poses] "
+                 "[--split-every N]\n",
                  e.what());
     return 2;
   }
@@ -186,24 +205,27 @@ int main(int argc, char** argv) {
   sim::SimOptions stereo;
   stereo.frames = frames;
   double wall = 0.0;
-  const fs::path stereo_dir = Simulate(scratch / "stereo", stereo);
-  auto costs = Run(stereo_dir, options, &wall);
-  PrintRow("sim stereo 480x360", costs, wall);
-  costs = Run(stereo_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
-  PrintRow("  the same, frames one by one", costs, wall);
-
+  std::vector<FrameCost> costs;
   sim::SimOptions cloud = stereo;
   cloud.sensor = sim::SensorKind::kCloud;
   cloud.cloud_stride_px = 3;  // about 19k points a frame
-  const fs::path cloud_dir = Simulate(scratch / "cloud", cloud);
-  costs = Run(cloud_dir, options, &wall);
-  PrintRow("sim cloud (stride 3)", costs, wall);
-  costs = Run(cloud_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
-  PrintRow("  the same, frames one by one", costs, wall);
+  if (!long_only) {
+    const fs::path stereo_dir = Simulate(scratch / "stereo", stereo);
+    costs = Run(stereo_dir, options, &wall);
+    PrintRow("sim stereo 480x360", costs, wall);
+    costs = Run(stereo_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
+    PrintRow("  the same, frames one by one", costs, wall);
 
-  if (!kitti.empty()) {
-    costs = Run(kitti, options, &wall);
-    PrintRow("KITTI stereo 1226x370", costs, wall);
+    const fs::path cloud_dir = Simulate(scratch / "cloud", cloud);
+    costs = Run(cloud_dir, options, &wall);
+    PrintRow("sim cloud (stride 3)", costs, wall);
+    costs = Run(cloud_dir, options, &wall, nullptr, 0, /*read_ahead=*/false);
+    PrintRow("  the same, frames one by one", costs, wall);
+
+    if (!kitti.empty()) {
+      costs = Run(kitti, options, &wall);
+      PrintRow("KITTI stereo 1226x370", costs, wall);
+    }
   }
 
   // A long traverse: does a frame cost more, or the process hold more, as the sequence grows?
@@ -212,8 +234,15 @@ int main(int argc, char** argv) {
   longer.path = sim::PathShape::kLoop;
   longer.terrain_size_m = 60.0;
   std::vector<MemorySplit> splits;
+  if (exact_poses) {
+    // Odometry without error and every increment taken from it: each lap maps the first
+    // lap's ground, so what still grows is the maps' own.
+    longer.odom_scale_error = longer.odom_slip_mean = longer.odom_slip_sigma = 0.0;
+    longer.heading_bias_deg_s = longer.heading_random_walk_deg_rt_s = 0.0;
+    options.mapper.min_inlier_ratio = 1.0;
+  }
   costs = Run(Simulate(scratch / "long", longer), options, &wall, &splits,
-              std::max<std::size_t>(1, static_cast<std::size_t>(long_frames) / 10));
+              static_cast<std::size_t>(split_every));
   PrintRow("sim cloud, " + std::to_string(long_frames) + " frames (loop)", costs, wall);
   const std::size_t n = costs.size(), tenth = std::max<std::size_t>(1, n / 10);
   const auto frame_ms = [](const FrameCost& f) { return f.total_ms; };
@@ -231,17 +260,13 @@ int main(int argc, char** argv) {
   stage("  hand to the OctoMap [ms]", &mapper::StageTimes::fuse_octomap_ms);
   std::printf("%-34s %12.1f %12.1f\n", "resident memory [MB], at the end", costs[tenth - 1].rss_mb,
               costs.back().rss_mb);
-  if (splits.size() == 2) {
-    const MemorySplit& a = splits[0];
-    const MemorySplit& b = splits[1];
-    std::printf("\n%-34s %12zu %12zu\n", "memory after frame", a.frames, b.frames);
-    std::printf("%-34s %12.1f %12.1f\n", "resident [MB]", a.rss_mb, b.rss_mb);
-    std::printf("%-34s %12.1f %12.1f\n", "  DEM tiles [MB]", a.dem_mb, b.dem_mb);
-    std::printf("%-34s %12.1f %12.1f\n", "  OcTree nodes [MB]", a.octomap_mb, b.octomap_mb);
-    std::printf("%-34s %12.1f %12.1f\n", "  per-frame results [MB]", a.results_mb, b.results_mb);
-    std::printf("%-34s %12.1f %12.1f\n", "  the rest [MB]", a.rest_mb(), b.rest_mb());
-    std::printf("%-34s %12zu %12zu\n", "DEM cells reached", a.dem_cells, b.dem_cells);
-    std::printf("%-34s %12zu %12zu\n", "OcTree leaves", a.octomap_leaves, b.octomap_leaves);
+  std::printf("\n%-12s %9s %9s %9s %9s %9s %9s %9s %10s %12s\n", "after frame", "RSS MB",
+              "DEM MB", "OcTree MB", "results", "rest MB", "heap used", "heap free", "DEM cells",
+              "OcTree leaves");
+  for (const MemorySplit& m : splits) {
+    std::printf("%-12zu %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f %10zu %12zu\n", m.frames,
+                m.rss_mb, m.dem_mb, m.octomap_mb, m.results_mb, m.rest_mb(), m.heap_used_mb,
+                m.heap_free_mb, m.dem_cells, m.octomap_leaves);
   }
   std::printf("# load average after: %s\n", bench::LoadAverage().c_str());
   fs::remove_all(scratch);
