@@ -1,6 +1,7 @@
 #include "mapper/ReadAhead.hpp"
 
 #include <chrono>
+#include <string>
 #include <utility>
 
 #include "io/IoError.hpp"
@@ -24,7 +25,10 @@ ReadAhead::Item ReadAhead::Fetch(std::size_t index) {
   const auto start = std::chrono::steady_clock::now();
   io::Frame frame;
   try {
-    reader_->Next(&frame);
+    if (!reader_->Next(&frame)) {
+      item.error = "no frame " + std::to_string(index) + " in the sequence";
+      return item;
+    }
   } catch (const io::IoError& e) {
     item.error = e.what();  // the reader has moved past it
     return item;

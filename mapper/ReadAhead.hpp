@@ -1,7 +1,6 @@
 #pragma once
-// Reading and step 1 of frame k+1 beside steps 2-8 of frame k (DESIGN §9: "overlap loading /
-// stereo of frame k+1 with registration and fusion of frame k"). One frame ahead only, so
-// memory stays flat.
+// Reading and step 1 (load, stereo, index) of frame k+1 beside steps 2-8 of frame k, so that
+// the cores the matcher leaves idle are used. One frame ahead only, so memory stays flat.
 
 #include <cstddef>
 #include <future>
