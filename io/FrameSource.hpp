@@ -43,6 +43,30 @@ class FrameSource {
   FrameSource& operator=(const FrameSource&) = default;
 };
 
+/// A FrameSource that holds every frame's poses from the start and reads the rest of a frame
+/// when asked: Read() sets a frame's index and poses and calls LoadFrame; Next() is
+/// Read(next_index()) that moves on even when it throws.
+class IndexedFrameSource : public FrameSource {
+ public:
+  const SequenceInfo& info() const override { return info_; }
+  std::size_t frame_count() const override { return odometry_.size(); }
+  std::size_t next_index() const override { return next_; }
+  const std::vector<StampedPose>& odometry() const override { return odometry_; }
+  const std::vector<StampedPose>& groundtruth() const override { return groundtruth_; }
+  bool Next(Frame* frame) final;
+  Frame Read(std::size_t index) const final;
+
+ protected:
+  /// Reads the images or points of `frame`, whose index and poses are set.
+  /// @throw IoError naming what cannot be read.
+  virtual void LoadFrame(Frame* frame) const = 0;
+
+  SequenceInfo info_;
+  std::vector<StampedPose> odometry_;
+  std::vector<StampedPose> groundtruth_;  ///< empty, or one per frame
+  std::size_t next_ = 0;
+};
+
 /// Opens the recording at `path`: today a sequence directory (DESIGN.md §4).
 /// @throw IoError naming the file (and line) at fault.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path);

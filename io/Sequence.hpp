@@ -38,44 +38,26 @@ cv::Mat ReadStereoImage(const std::filesystem::path& file, const CameraModel& ca
 /// frame into `frame` (its poses are left alone). @throw IoError naming the file.
 void ReadFrameData(const std::filesystem::path& stem, const SequenceInfo& info, Frame* frame);
 
-/// Opens and validates a sequence; then Next() reads frames in index order.
+/// Opens and validates a sequence; then Next() reads frames in index order (groundtruth() is
+/// empty when the sequence has no groundtruth.tum).
 ///
 /// Opening checks everything but the frame contents: sequence.yaml (keys, calibration),
 /// odometry.tum and groundtruth.tum (8 columns, unit quaternions, strictly increasing
 /// timestamps), that groundtruth.tum has as many lines as odometry.tum with the same
 /// timestamps (within 1 µs), and that frames/ holds exactly frames 0 … N−1 for the N poses of
 /// odometry.tum (both images for stereo, the PLY for cloud) and no others.
-class SequenceReader : public FrameSource {
+class SequenceReader : public IndexedFrameSource {
  public:
   /// @throw IoError naming the file (and line) at fault.
   explicit SequenceReader(const std::filesystem::path& sequence_dir);
-
-  const SequenceInfo& info() const override { return info_; }
-  std::size_t frame_count() const override { return odometry_.size(); }
-  std::size_t next_index() const override { return next_; }
-  const std::vector<StampedPose>& odometry() const override { return odometry_; }
-  /// Empty when the sequence has no groundtruth.tum.
-  const std::vector<StampedPose>& groundtruth() const override { return groundtruth_; }
-
-  /// Reads the next frame into `frame` (replacing its contents).
-  /// @return false (and leaves `frame` alone) when every frame has been read.
-  /// @throw IoError naming the file if an image or PLY cannot be read or decoded, or an image
-  ///        does not have the camera's size. The reader moves past that frame, so a caller may
-  ///        skip it and go on.
-  bool Next(Frame* frame) override;
-
-  /// Reads frame `index` (random access, e.g. to retry). Same errors as Next; std::out_of_range
-  /// if index >= frame_count().
-  Frame Read(std::size_t index) const override;
 
   /// Starts again at frame 0.
   void Rewind() { next_ = 0; }
 
  private:
-  SequenceInfo info_;
-  std::vector<StampedPose> odometry_;
-  std::vector<StampedPose> groundtruth_;
-  std::size_t next_ = 0;
+  /// @throw IoError naming the file if an image or PLY cannot be read or decoded, or an image
+  ///        does not have the camera's size.
+  void LoadFrame(Frame* frame) const override;
 };
 
 }  // namespace rovermap::io
