@@ -23,8 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Where one image is: its topic, the time it was recorded at (what a View queries by) and its
-// header stamp (what tells it from others recorded at the same time).
+// Where one image is: the time it was recorded at (what a View queries by) and its header
+// stamp (what tells it from others recorded at the same time).
 struct ImageRef {
   ros::Time recorded;
   ros::Time stamp;
@@ -130,7 +130,7 @@ struct BagSource::Bag {
     } catch (const rosbag::BagException& e) {
       throw IoError(what + ": " + e.what());
     }
-    if (!image) throw IoError(what + ": image is gone");
+    if (!image) throw IoError(what + ": image not found again at its recording time");
     cv::Mat grey = ToGrey(*image, what);
     if (grey.cols != camera.width || grey.rows != camera.height) {
       throw IoError(what + ": image is " + std::to_string(grey.cols) + "x" +
@@ -242,8 +242,8 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
   }
   if (odometry_.empty()) {
     throw IoError(name + ": no left/right image pair within " + std::to_string(o.pair_tolerance_s) +
-                  " s of each other and within the " + "odometry's time span (" +
-                  o.left_image_topic + ", " + o.right_image_topic + ")");
+                  " s of each other and within the odometry's time span (" + o.left_image_topic +
+                  ", " + o.right_image_topic + ")");
   }
 
   info_.directory = bag_file;

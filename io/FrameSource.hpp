@@ -1,6 +1,6 @@
 #pragma once
 // The frames of a recording, in order, whatever holds them: a sequence directory
-// (SequenceReader) or, later, a ROS bag. Replay and mapper::ReadAhead see only this.
+// (SequenceReader) or a ROS 1 bag (BagSource). Replay and mapper::ReadAhead see only this.
 
 #include <cstddef>
 #include <filesystem>
