@@ -7,13 +7,14 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
-#include "io/Sequence.hpp"
 #include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/Outputs.hpp"
@@ -124,26 +125,27 @@ int RunReplay(const ReplayArgs& args) {
                          args.config.overrides);
   const std::filesystem::path out(args.out);
   CheckOutputDirectory(out, args.force, "overwrite its outputs");
-  // Opening validates the whole sequence (calibration, poses, frame files) before any output.
-  io::SequenceReader reader{std::filesystem::path(args.sequence)};
+  // Opening validates the whole recording (calibration, poses, frame files) before any output.
+  const std::unique_ptr<io::FrameSource> source =
+      io::OpenFrameSource(std::filesystem::path(args.sequence));
   std::unique_ptr<mapper::Mapper> mapper;
   try {
-    mapper = std::make_unique<mapper::Mapper>(reader.info(), PipelineFrom(cfg));
+    mapper = std::make_unique<mapper::Mapper>(source->info(), PipelineFrom(cfg));
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
   }
 
-  Progress progress(reader.frame_count());
+  Progress progress(source->frame_count());
   // Frame k+1 is read and prepared (stereo, index, outlier flags) while frame k is registered
   // and fused: on the 2-core machine that fills the cores the matcher leaves idle.
-  mapper::ReadAhead ahead(&reader, mapper.get());
+  mapper::ReadAhead ahead(source.get(), mapper.get());
   mapper::ReadAhead::Item item;
   while (ahead.Next(&item)) {
     if (!item.frame) {
       // An unreadable frame never aborts a replay: dead reckoning carries the pose over it.
-      const io::StampedPose& odom = reader.odometry()[item.index];
+      const io::StampedPose& odom = source->odometry()[item.index];
       std::optional<Eigen::Isometry3d> truth;
-      if (reader.has_groundtruth()) truth = reader.groundtruth()[item.index].T_world_body;
+      if (source->has_groundtruth()) truth = source->groundtruth()[item.index].T_world_body;
       const mapper::FrameResult r =
           mapper->SkipFrame(item.index, odom.timestamp, odom.T_world_body,
                             mapper::FallbackReason::kBadFrame, item.error, truth);

@@ -182,25 +182,8 @@ SequenceReader::SequenceReader(const fs::path& sequence_dir) {
   }
 }
 
-Frame SequenceReader::Read(std::size_t index) const {
-  if (index >= odometry_.size()) {
-    throw std::out_of_range("SequenceReader::Read: frame " + std::to_string(index) + " of " +
-                            std::to_string(odometry_.size()));
-  }
-  Frame frame;
-  frame.index = index;
-  frame.timestamp = odometry_[index].timestamp;
-  frame.T_world_body_odom = odometry_[index].T_world_body;
-  if (!groundtruth_.empty()) frame.T_world_body_truth = groundtruth_[index].T_world_body;
-  ReadFrameData(info_.directory / "frames" / FrameStem(index), info_, &frame);
-  return frame;
-}
-
-bool SequenceReader::Next(Frame* frame) {
-  if (next_ >= odometry_.size()) return false;
-  const std::size_t index = next_++;
-  *frame = Read(index);
-  return true;
+void SequenceReader::LoadFrame(Frame* frame) const {
+  ReadFrameData(info_.directory / "frames" / FrameStem(frame->index), info_, frame);
 }
 
 }  // namespace rovermap::io

@@ -12,24 +12,11 @@
 #include <vector>
 
 #include "io/CameraModel.hpp"
-#include "io/Georeference.hpp"  // GeodeticOrigin
+#include "io/Frame.hpp"
+#include "io/FrameSource.hpp"
 #include "io/Tum.hpp"
-#include "registration/PointCloud.hpp"
 
 namespace rovermap::io {
-
-enum class SensorType { kStereo, kCloud };
-
-/// Everything sequence.yaml says.
-struct SequenceInfo {
-  std::filesystem::path directory;
-  SensorType sensor_type = SensorType::kStereo;
-  std::optional<CameraModel> camera;  ///< always set for stereo
-  Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
-  GeodeticOrigin origin;  ///< of the world (local ENU) frame
-  double frame_rate_hz = 0.0;
-  std::string body = "earth";  ///< earth|moon|mars
-};
 
 /// Reads sequence.yaml (in config/, the only YAML user) and converts it.
 /// @throw IoError "DIR/sequence.yaml:LINE: KEY: reason" on any problem (see
@@ -47,62 +34,30 @@ bool ParseFrameFileName(const std::string& name, std::size_t* index, std::string
 /// An 8-bit grey image that must have the camera's size. @throw IoError naming the file.
 cv::Mat ReadStereoImage(const std::filesystem::path& file, const CameraModel& camera);
 
-/// One frame as read from disk.
-struct Frame {
-  std::size_t index = 0;
-  double timestamp = 0.0;  ///< [s], from odometry.tum
-  Eigen::Isometry3d T_world_body_odom = Eigen::Isometry3d::Identity();
-  std::optional<Eigen::Isometry3d> T_world_body_truth;  ///< when groundtruth.tum exists
-  cv::Mat left;                    ///< stereo: 8-bit grey, camera.width × camera.height
-  cv::Mat right;                   ///< stereo: same size as left
-  registration::PointCloud cloud;  ///< cloud: points in the sensor frame
-  std::filesystem::path file;      ///< left image or PLY file (for messages)
-};
-
 /// Reads the images (stereo: `stem`.left.png and .right.png) or the points (`stem`.ply) of a
 /// frame into `frame` (its poses are left alone). @throw IoError naming the file.
 void ReadFrameData(const std::filesystem::path& stem, const SequenceInfo& info, Frame* frame);
 
-/// Opens and validates a sequence; then Next() reads frames in index order.
+/// Opens and validates a sequence; then Next() reads frames in index order (groundtruth() is
+/// empty when the sequence has no groundtruth.tum).
 ///
 /// Opening checks everything but the frame contents: sequence.yaml (keys, calibration),
 /// odometry.tum and groundtruth.tum (8 columns, unit quaternions, strictly increasing
 /// timestamps), that groundtruth.tum has as many lines as odometry.tum with the same
 /// timestamps (within 1 µs), and that frames/ holds exactly frames 0 … N−1 for the N poses of
 /// odometry.tum (both images for stereo, the PLY for cloud) and no others.
-class SequenceReader {
+class SequenceReader : public IndexedFrameSource {
  public:
   /// @throw IoError naming the file (and line) at fault.
   explicit SequenceReader(const std::filesystem::path& sequence_dir);
-
-  const SequenceInfo& info() const { return info_; }
-  std::size_t frame_count() const { return odometry_.size(); }
-  /// Index of the frame the next Next() call reads (= frames read so far).
-  std::size_t next_index() const { return next_; }
-  const std::vector<StampedPose>& odometry() const { return odometry_; }
-  /// Empty when the sequence has no groundtruth.tum.
-  const std::vector<StampedPose>& groundtruth() const { return groundtruth_; }
-  bool has_groundtruth() const { return !groundtruth_.empty(); }
-
-  /// Reads the next frame into `frame` (replacing its contents).
-  /// @return false (and leaves `frame` alone) when every frame has been read.
-  /// @throw IoError naming the file if an image or PLY cannot be read or decoded, or an image
-  ///        does not have the camera's size. The reader moves past that frame, so a caller may
-  ///        skip it and go on.
-  bool Next(Frame* frame);
-
-  /// Reads frame `index` (random access, e.g. to retry). Same errors as Next; std::out_of_range
-  /// if index >= frame_count().
-  Frame Read(std::size_t index) const;
 
   /// Starts again at frame 0.
   void Rewind() { next_ = 0; }
 
  private:
-  SequenceInfo info_;
-  std::vector<StampedPose> odometry_;
-  std::vector<StampedPose> groundtruth_;
-  std::size_t next_ = 0;
+  /// @throw IoError naming the file if an image or PLY cannot be read or decoded, or an image
+  ///        does not have the camera's size.
+  void LoadFrame(Frame* frame) const override;
 };
 
 }  // namespace rovermap::io

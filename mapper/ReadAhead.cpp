@@ -8,9 +8,9 @@
 
 namespace rovermap::mapper {
 
-ReadAhead::ReadAhead(io::SequenceReader* reader, const Mapper* mapper)
-    : reader_(reader), mapper_(mapper), next_(reader->next_index()) {
-  if (next_ < reader_->frame_count()) {
+ReadAhead::ReadAhead(io::FrameSource* source, const Mapper* mapper)
+    : source_(source), mapper_(mapper), next_(source->next_index()) {
+  if (next_ < source_->frame_count()) {
     pending_ = std::async(std::launch::async, &ReadAhead::Fetch, this, next_);
   }
 }
@@ -25,12 +25,12 @@ ReadAhead::Item ReadAhead::Fetch(std::size_t index) {
   const auto start = std::chrono::steady_clock::now();
   io::Frame frame;
   try {
-    if (!reader_->Next(&frame)) {
-      item.error = "no frame " + std::to_string(index) + " in the sequence";
+    if (!source_->Next(&frame)) {
+      item.error = "no frame " + std::to_string(index) + " in the recording";
       return item;
     }
   } catch (const io::IoError& e) {
-    item.error = e.what();  // the reader has moved past it
+    item.error = e.what();  // the source has moved past it
     return item;
   }
   item.load_ms =
@@ -44,7 +44,7 @@ bool ReadAhead::Next(Item* item) {
   if (!pending_.valid()) return false;
   *item = pending_.get();  // rethrows what Fetch threw
   ++next_;
-  if (next_ < reader_->frame_count()) {
+  if (next_ < source_->frame_count()) {
     pending_ = std::async(std::launch::async, &ReadAhead::Fetch, this, next_);
   }
   return true;

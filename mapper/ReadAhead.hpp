@@ -7,14 +7,14 @@
 #include <optional>
 #include <string>
 
-#include "io/Sequence.hpp"
+#include "io/FrameSource.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::mapper {
 
-/// Reads the frames of `reader` in order and prepares each with `mapper.Prepare` on a thread
+/// Reads the frames of `source` in order and prepares each with `mapper.Prepare` on a thread
 /// of its own, one frame ahead of the caller. Both must outlive it; the caller must not use
-/// `reader` meanwhile. Mapper::Prepare reads only what ProcessPrepared never changes, so the
+/// `source` meanwhile. Mapper::Prepare reads only what ProcessPrepared never changes, so the
 /// caller may process frame k while frame k+1 is prepared.
 class ReadAhead {
  public:
@@ -26,7 +26,7 @@ class ReadAhead {
     double load_ms = 0.0;    ///< reading the files
   };
 
-  ReadAhead(io::SequenceReader* reader, const Mapper* mapper);
+  ReadAhead(io::FrameSource* source, const Mapper* mapper);
   ReadAhead(const ReadAhead&) = delete;
   ReadAhead& operator=(const ReadAhead&) = delete;
   /// Waits for the frame in flight, if any.
@@ -39,7 +39,7 @@ class ReadAhead {
  private:
   Item Fetch(std::size_t index);
 
-  io::SequenceReader* reader_;
+  io::FrameSource* source_;
   const Mapper* mapper_;
   std::size_t next_ = 0;
   std::future<Item> pending_;

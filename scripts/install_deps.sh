@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libopencv-dev liboctomap-dev libgeographiclib-dev libgdal-dev libtbb-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
   clang libclang-rt-14-dev libomp-dev
 )
 if [[ "${ROVERMAP_BENCH_PEERS:-OFF}" == "ON" ]]; then

@@ -1,0 +1,35 @@
+#include "io/FrameSource.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "io/Sequence.hpp"
+
+namespace rovermap::io {
+
+Frame IndexedFrameSource::Read(std::size_t index) const {
+  if (index >= odometry_.size()) {
+    throw std::out_of_range("FrameSource::Read: frame " + std::to_string(index) + " of " +
+                            std::to_string(odometry_.size()));
+  }
+  Frame frame;
+  frame.index = index;
+  frame.timestamp = odometry_[index].timestamp;
+  frame.T_world_body_odom = odometry_[index].T_world_body;
+  if (!groundtruth_.empty()) frame.T_world_body_truth = groundtruth_[index].T_world_body;
+  LoadFrame(&frame);
+  return frame;
+}
+
+bool IndexedFrameSource::Next(Frame* frame) {
+  if (next_ >= odometry_.size()) return false;
+  const std::size_t index = next_++;
+  *frame = Read(index);
+  return true;
+}
+
+std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path) {
+  return std::make_unique<SequenceReader>(path);
+}
+
+}  // namespace rovermap::io
