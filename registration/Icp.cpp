@@ -199,9 +199,15 @@ double UncertaintyWeight(const IndexedCloud& source, const IndexedCloud& target,
 void KeepWithinGate(const IndexedCloud& source, const IndexedCloud& target,
                     const Eigen::Isometry3d& T, double dmax, double sampling_variance,
                     const RegistrationOptions& options, std::vector<Match>* matches) {
+  if (!options.use_uncertainty) {  // a distance test: one pass, nothing to run in parallel
+    matches->erase(std::remove_if(matches->begin(), matches->end(),
+                                  [dmax](const Match& m) { return !(m.distance <= dmax); }),
+                   matches->end());
+    return;
+  }
   const auto count = static_cast<long>(matches->size());
   std::vector<char> pass(matches->size());
-#pragma omp parallel for schedule(static) if (options.use_uncertainty && count > 2048)
+#pragma omp parallel for schedule(static) if (count > 2048)
   for (long k = 0; k < count; ++k) {
     pass[static_cast<std::size_t>(k)] =
         PassesGate(source, target, (*matches)[static_cast<std::size_t>(k)], T, dmax,
