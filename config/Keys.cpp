@@ -220,6 +220,8 @@ std::vector<KeyEntry> BuildRegistry() {
                   "drop points whose horizontal sigma exceeds this; 0 = off");
   dem_keys.Int("min_support", &D::min_support, "count", AtLeast(1),
                "points a cell needs before it is published (else NaN)");
+  dem_keys.Int("min_frame_span", &D::min_frame_span, "frames", AtLeast(1),
+               "published only when its points span this many frames; 1 = off");
   dem_keys.Int("min_agreeing_neighbors", &D::min_agreeing_neighbors, "count",
                Bounds{0, false, 8, false},
                "published only with this many agreeing supported neighbours; 0 = off");

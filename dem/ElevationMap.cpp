@@ -40,6 +40,7 @@ void Validate(const ElevationMapOptions& options) {
     Invalid("min_point_variance_m2", "finite and >= 0", options.min_point_variance_m2);
   }
   if (options.min_support < 1) Invalid("min_support", ">= 1", options.min_support);
+  if (options.min_frame_span < 1) Invalid("min_frame_span", ">= 1", options.min_frame_span);
   if (options.min_agreeing_neighbors < 0 || options.min_agreeing_neighbors > 8) {
     Invalid("min_agreeing_neighbors", "in [0, 8]", options.min_agreeing_neighbors);
   }
@@ -162,7 +163,7 @@ bool ElevationMap::WithinGate(double h, double p, double z, double r) const {
 bool ElevationMap::CandidateTakesOver(const CellRecord& record) const {
   const CellValue& v = record.value;
   const CellCandidate& c = record.candidate;
-  if (c.start_frame == record.start_frame) {
+  if (c.start_frame == v.first_frame) {
     // One view saw both: a vertical structure (rock face and top). The higher hypothesis wins
     // once it has support, never as an isolated point.
     const auto support = static_cast<std::uint32_t>(std::max(2, options_.min_support));
@@ -184,8 +185,7 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
   const auto zf = static_cast<float>(z);
   const auto rf = static_cast<float>(r_update);
   if (v.count == 0) {
-    v = {zf, rf, zf, zf, 1, frame};
-    record.start_frame = frame;
+    v = {zf, rf, zf, zf, 1, frame, frame};
     ++tile.filled;
     bounds_.Extend(cell);
     if (stats != nullptr) ++stats->fused;
@@ -207,7 +207,7 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
       std::swap(v.elevation_m, c.height_m);
       std::swap(v.variance_m2, c.variance_m2);
       std::swap(v.count, c.count);
-      std::swap(record.start_frame, c.start_frame);
+      std::swap(v.first_frame, c.start_frame);
       v.last_frame = frame;
       if (stats != nullptr) ++stats->swapped;
     }
@@ -358,8 +358,8 @@ void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m
   }
   const auto zf = static_cast<float>(elevation_m);
   record = CellRecord{};
-  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame};
-  record.start_frame = frame;
+  const auto span = static_cast<std::uint32_t>(options_.min_frame_span - 1);
+  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame + span, frame};
   if (!was_filled) ++tile.filled;
   bounds_.Extend(cell);
 }

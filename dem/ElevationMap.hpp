@@ -57,6 +57,11 @@ struct ElevationMapOptions {
   /// [count] points the primary needs before the cell is published (and before a higher
   /// hypothesis of the same view takes over, at least 2); >= 1. 1 publishes every cell.
   int min_support = 3;
+  /// [frames] a cell is published only when the points of its primary span at least this many
+  /// frames (last − first + 1): stereo mismatches that one frame makes (SGBM filling untextured
+  /// sky or shadow from its edges) land where no other frame confirms them, while true ground
+  /// is seen again by the next frame. 1 = off; >= 1.
+  int min_frame_span = 2;
   /// [cells] a point whose horizontal position is less certain than this many cells (the
   /// larger σ of its covariance's horizontal block) is not fused: a far stereo point lands in
   /// a cell it may not belong to, and on sloping ground its height is then wrong by the slope ×
@@ -101,6 +106,7 @@ struct CellValue {
   float max_m = kEmpty;          ///< highest such point [m]
   std::uint32_t count = 0;       ///< points fused into the current estimate
   std::uint32_t last_frame = 0;  ///< frame of the last update
+  std::uint32_t first_frame = 0;  ///< frame of the first point of the current estimate
   bool Empty() const { return count == 0; }
 };
 
@@ -112,12 +118,11 @@ struct CellCandidate {
   std::uint32_t start_frame = 0;          ///< frame of its first point
 };
 
-/// One cell as stored: the primary's layers and start frame, then the candidate. 44 bytes, no
+/// One cell as stored: the primary's layers, then the candidate. 44 bytes, no
 /// padding; README "The maps" gives its fusion speed against the 32-byte one-hypothesis record
 /// and a 48-byte aligned one.
 struct CellRecord {
   CellValue value;
-  std::uint32_t start_frame = 0;  ///< frame of the primary's first point
   CellCandidate candidate;
 };
 static_assert(sizeof(CellRecord) == 44, "CellRecord: keep the layout compact (see above)");
@@ -189,7 +194,8 @@ class ElevationMap {
                  FusionStats* stats = nullptr);
 
   /// Overwrites one cell (e.g. a simulator's true terrain): elevation and variance, count
-  /// (default: min_support, so that the cell is published), min = max = elevation; no candidate.
+  /// (default: min_support) and frames `frame` .. frame + min_frame_span − 1, so that the cell is
+  /// published; min = max = elevation; no candidate.
   /// Allocates the tile. A non-finite elevation or a count of 0 empties the cell.
   void SetCell(CellIndex cell, double elevation_m, double variance_m2,
                std::optional<std::uint32_t> count = std::nullopt, std::uint32_t frame = 0);
@@ -206,9 +212,12 @@ class ElevationMap {
   /// The cell's raw layers, published or not; nullopt if its tile was never allocated or the
   /// cell is empty.
   std::optional<CellValue> Cell(CellIndex cell) const;
-  /// True if the cell's primary holds at least min_support points.
+  /// True if the cell's primary holds at least min_support points from frames spanning at
+  /// least min_frame_span.
   bool Supported(const CellValue& value) const {
-    return value.count >= static_cast<std::uint32_t>(options_.min_support);
+    return value.count >= static_cast<std::uint32_t>(options_.min_support) &&
+           value.last_frame - value.first_frame >=
+               static_cast<std::uint32_t>(options_.min_frame_span - 1);
   }
   /// The one test of what the map publishes (HeightAt, ForEachPublishedCell,
   /// io::WriteDemGeoTiff, io::WriteDemPreview): `value` (the layers of `cell`) is Supported and
