@@ -219,7 +219,7 @@ const char* NonFiniteWhat(int role) {
 
 PointCloud ReadAsciiBody(const std::filesystem::path& path, std::string_view data,
                          const PlyHeader& header, std::size_t vertex_index,
-                         const VertexLayout& layout) {
+                         const VertexLayout& layout, NonFinite non_finite) {
   detail::LineCursor cursor(data, header.data_offset, header.header_lines);
   std::string_view line;
   // Next non-blank line; false at end of file.
@@ -294,7 +294,9 @@ PointCloud ReadAsciiBody(const std::filesystem::path& path, std::string_view dat
           case detail::NumberStatus::kOutOfRange:
             Fail(path, line_no, "value out of range " + Quote(tokens[t]));
         }
-        if (!std::isfinite(value)) Fail(path, line_no, NonFiniteWhat(role) + Quote(tokens[t]));
+        if (non_finite == NonFinite::kReject && !std::isfinite(value)) {
+          Fail(path, line_no, NonFiniteWhat(role) + Quote(tokens[t]));
+        }
       }
       ++t;
     }
@@ -402,7 +404,7 @@ bool SkipList(const std::filesystem::path& path, BinaryReader* reader,
 
 PointCloud ReadBinaryBody(const std::filesystem::path& path, std::string_view data,
                           const PlyHeader& header, std::size_t vertex_index,
-                          const VertexLayout& layout) {
+                          const VertexLayout& layout, NonFinite non_finite) {
   BinaryReader reader(data, header.data_offset, header.format == PlyFormat::kBinaryBigEndian);
 
   for (std::size_t e = 0; e < vertex_index; ++e) {
@@ -470,7 +472,7 @@ PointCloud ReadBinaryBody(const std::filesystem::path& path, std::string_view da
       }
       double& value = values[role];
       if (!reader.Read(property.type, &value)) truncated(i);
-      if (!std::isfinite(value)) {
+      if (non_finite == NonFinite::kReject && !std::isfinite(value)) {
         Fail(path, 0,
              std::string(NonFiniteWhat(role)) + "in vertex " + std::to_string(i) + " (" +
                  std::string(kRoleNames[role]) + " = " + std::to_string(value) + ")");
@@ -483,11 +485,12 @@ PointCloud ReadBinaryBody(const std::filesystem::path& path, std::string_view da
 
 }  // namespace
 
-registration::PointCloud ReadPly(const std::filesystem::path& path) {
-  return ParsePly(ReadWholeFile(path), path);
+registration::PointCloud ReadPly(const std::filesystem::path& path, NonFinite non_finite) {
+  return ParsePly(ReadWholeFile(path), path, non_finite);
 }
 
-registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path) {
+registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path,
+                                  NonFinite non_finite) {
   if (data.empty()) Fail(path, 0, "empty file");
   const PlyHeader header = ParseHeader(path, data);
 
@@ -502,9 +505,9 @@ registration::PointCloud ParsePly(std::string_view data, const std::filesystem::
 
   // Elements after the vertices (faces, range grids) are never read.
   if (header.format == PlyFormat::kAscii) {
-    return ReadAsciiBody(path, data, header, vertex_index, layout);
+    return ReadAsciiBody(path, data, header, vertex_index, layout, non_finite);
   }
-  return ReadBinaryBody(path, data, header, vertex_index, layout);
+  return ReadBinaryBody(path, data, header, vertex_index, layout, non_finite);
 }
 
 }  // namespace rovermap::io

@@ -22,14 +22,24 @@ registration::PointCloud ReadXyz(const std::filesystem::path& path);
 /// ReadXyz on bytes already read; `path` only names the file in messages. Same errors.
 registration::PointCloud ParseXyz(std::string_view data, const std::filesystem::path& path);
 
+/// What the PLY reader does with a non-finite (NaN, ±inf) coordinate or normal.
+enum class NonFinite {
+  kReject,  ///< an IoError naming the file and the line or vertex: a scan given to `register`
+  /// Kept as read, for the caller to drop and count: a sensor's frame (an organised cloud holds
+  /// NaN where a pixel had no return), whose finite points are still good (DESIGN.md §9).
+  kKeep,
+};
+
 /// PLY (ascii, binary_little_endian or binary_big_endian 1.0; LF or CRLF). Reads x, y, z of the
 /// `vertex` element (any scalar type), plus nx, ny, nz when all three are present; every other
 /// property and element is skipped. chain_ids is left empty.
-registration::PointCloud ReadPly(const std::filesystem::path& path);
+registration::PointCloud ReadPly(const std::filesystem::path& path,
+                                 NonFinite non_finite = NonFinite::kReject);
 
 /// ReadPly on bytes already read; `path` only names the file in messages. Same errors; never
 /// allocates more than the data can hold, whatever counts the header claims.
-registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path);
+registration::PointCloud ParsePly(std::string_view data, const std::filesystem::path& path,
+                                  NonFinite non_finite = NonFinite::kReject);
 
 /// Writes a PLY with `double` x y z (and nx ny nz when the cloud has normals), binary little
 /// endian or ascii. Atomic: written to `<path>.tmp-XXXXXX`, then renamed over `path`.

@@ -61,7 +61,7 @@ void ReadFrameData(const fs::path& stem, const SequenceInfo& info, Frame* frame)
     frame->right = ReadStereoImage(stem.string() + ".right.png", *info.camera);
   } else {
     frame->file = stem.string() + ".ply";
-    frame->cloud = ReadPly(frame->file);
+    frame->cloud = ReadPly(frame->file, NonFinite::kKeep);  // the mapper drops and counts them
   }
 }
 

@@ -105,13 +105,14 @@ std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& result
 nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift) {
   const std::vector<FrameResult>& results = state.results;
-  std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0;
+  std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0, nonfinite = 0;
   for (const FrameResult& r : results) {
     if (r.status == FrameStatus::kRegistered || r.status == FrameStatus::kPartial) ++registered;
     if (r.status == FrameStatus::kPartial) ++partial;
     if (r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame) ++fallbacks;
     if (r.status == FrameStatus::kBadFrame) ++bad;
     outliers += r.outliers_removed;
+    nonfinite += r.dropped_nonfinite;
   }
   nlohmann::json timing = {
       {"load", StageJson(results, [](const StageTimes& t) { return t.load_ms; })},
@@ -130,6 +131,7 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
       {"partial", partial},
       {"fallbacks", fallbacks},
       {"bad_frames", bad},
+      {"dropped_nonfinite", nonfinite},
       {"distance_m", state.distance_m},
       {"final_correction", CorrectionJson(state.final_correction)},
       {"timing", timing},

@@ -479,9 +479,8 @@ TEST_F(BadInput, Replay_NonFiniteCalibration) {
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
-// Every point of frame 2 NaN (the PLY's properties are all doubles). The PLY reader refuses a
-// non-finite coordinate, so the frame is a bad frame (README, "Bad input": not dropped point by
-// point as DESIGN §9 says).
+// Every point of frame 2 NaN (the PLY's properties are all doubles): each is dropped and
+// counted (DESIGN §9), which leaves no point, so the frame is a bad frame.
 TEST_F(BadInput, Replay_NonFinitePoints) {
   const fs::path seq = Copy(kTinyCloud, "seq");
   const fs::path ply = seq / "frames" / "000002.ply";
@@ -492,7 +491,36 @@ TEST_F(BadInput, Replay_NonFinitePoints) {
   for (std::size_t at = data; at + sizeof(nan) <= bytes.size(); at += sizeof(nan))
     bytes.replace(at, sizeof(nan), reinterpret_cast<const char*>(&nan), sizeof(nan));
   Put(ply, bytes);
-  ExpectBadFrameSkipped(Replay(seq), 2, "000002.ply: non-finite coordinate in vertex 0 (x = nan)");
+  ExpectBadFrameSkipped(Replay(seq), 2, "000002.ply: no usable points, 1200 non-finite dropped");
+}
+
+// A quarter of frame 2's points NaN (x of every 4th vertex; 6 doubles a vertex), as an organised
+// sensor writes pixels without a return: they are dropped and counted, the rest registered and
+// fused (they made the whole frame a bad frame while the PLY reader refused them).
+TEST_F(BadInput, Replay_SomeNonFinitePointsAreDroppedAndCounted) {
+  const fs::path seq = Copy(kTinyCloud, "seq");
+  const fs::path ply = seq / "frames" / "000002.ply";
+  std::string bytes = Slurp(ply);
+  ASSERT_TRUE(Has(bytes,
+                  "element vertex 1200\nproperty double x\nproperty double y\n"
+                  "property double z\nproperty double nx\nproperty double ny\n"
+                  "property double nz\nend_header\n"));
+  const std::size_t data = bytes.find("end_header\n") + 11;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  constexpr std::size_t kVertexBytes = 6 * sizeof(double);
+  for (std::size_t v = 0; v < 1200; v += 4)
+    bytes.replace(data + v * kVertexBytes, sizeof(nan), reinterpret_cast<const char*>(&nan),
+                  sizeof(nan));
+  Put(ply, bytes);
+  const CommandResult r = Replay(seq);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const fs::path out = dir_ / "out";
+  const nlohmann::json summary = nlohmann::json::parse(Slurp(out / "summary.json"));
+  EXPECT_EQ(summary["bad_frames"], 0);
+  EXPECT_EQ(summary["dropped_nonfinite"], 300);
+  const std::vector<std::string> rows = DataLines(out / "drift.csv");
+  ASSERT_GT(rows.size(), 3u);
+  EXPECT_TRUE(Has(rows[3], ",registered,")) << rows[3];
 }
 
 // The latitude in micro-degrees.

@@ -554,6 +554,30 @@ TEST_F(PointCloudIoTest, BinaryPlyErrors) {
 
 // Every prefix and many single-byte corruptions of valid files give a cloud or an IoError:
 // never a crash, hang or read past the buffer (run under ASan via `make test-asan`).
+// A sensor's frame keeps its non-finite points for the mapper to drop and count (kKeep); a scan
+// given to `register` is refused (kReject, the default), ascii and binary alike.
+TEST_F(PointCloudIoTest, PlyNonFiniteKeptOnlyWhenAsked) {
+  const fs::path ascii = Write("nan.ply", AsciiHeader(3) + "1 2 3\nnan 5 6\n7 8 inf\n");
+  std::string bytes =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 2\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n";
+  for (const float v : {1.0f, std::numeric_limits<float>::quiet_NaN(), 3.0f, 4.0f, 5.0f, 6.0f}) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &v, sizeof(bits));
+    for (int shift = 24; shift >= 0; shift -= 8) bytes.push_back(static_cast<char>(bits >> shift));
+  }
+  const fs::path binary = Write("nan_be.ply", bytes);
+  for (const fs::path& path : {ascii, binary}) {
+    EXPECT_CONTAINS(ErrorOf(path), "non-finite coordinate");
+    const PointCloud cloud = ReadPly(path, NonFinite::kKeep);
+    ASSERT_EQ(cloud.size(), path == ascii ? 3u : 2u);
+    EXPECT_FALSE(cloud.points[path == ascii ? 1 : 0].allFinite());
+    EXPECT_EQ(cloud.points.back(),
+              path == ascii ? Eigen::Vector3d(7, 8, std::numeric_limits<double>::infinity())
+                            : Eigen::Vector3d(4, 5, 6));
+  }
+}
+
 TEST_F(PointCloudIoTest, TruncatedAndCorruptedFilesNeverCrash) {
   const std::vector<std::pair<std::string, std::string>> files = {
       {"b.ply", BinaryPly<float>(kPoints, false, "float", true)},
