@@ -299,7 +299,7 @@ CameraModel StereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs:
   camera.fy = left.P[5];
   camera.cx = left.P[2];
   camera.cy = left.P[6];
-  camera.baseline_m = -right.P[3] / right.P[0];
+  camera.baseline_m = 0.0 - right.P[3] / right.P[0];  // 0.0 -: no "-0" in messages
   if (!(camera.baseline_m > 0.0)) {
     throw IoError(name + ": " + o.right_info_topic +
                   ": projection P gives no positive baseline (-P[0,3]/fx = " +

@@ -323,6 +323,16 @@ TEST_F(BagReplay, AFrameThatCannotBeDecodedIsLeftOutOfAnImport) {
   const nlohmann::json summary = nlohmann::json::parse(r.out);
   EXPECT_EQ(summary["frames"], 2);
   EXPECT_EQ(summary["skipped"]["unreadable"], 1);
+  // Every frame cut: the import fails after it started writing, and leaves nothing behind.
+  how.edit_compressed = [](std::size_t, bool, sensor_msgs::CompressedImage* image) {
+    image->data.resize(image->data.size() / 3);
+  };
+  const fs::path none = dir_ / "none";
+  r = Rovermap("import " + Bag("all_cut.bag", how).string() + " --out " + none.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("all_cut.bag: no frame could be read"), std::string::npos) << r.err;
+  ExpectNothingWritten(none, "all frames cut");
+
   const rovermap::io::SequenceReader imported(seq);
   ASSERT_EQ(imported.frame_count(), 2u);
   EXPECT_NEAR(imported.odometry()[1].timestamp, rovermap::testing::kBagTimeOffset + 1.0, 1e-9);
