@@ -13,6 +13,7 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -412,6 +413,194 @@ struct BagSource::Bag {
   }
 };
 
+namespace {
+
+// The topics of `bag` and their message types.
+std::map<std::string, std::string> TopicTypes(rosbag::Bag& bag) {
+  std::map<std::string, std::string> types;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections()) types.emplace(c->topic, c->datatype);
+  return types;
+}
+
+// The topics to read for `o`. @throw IoError naming `name` if one is missing (listing what the
+// bag has) or of another type.
+std::vector<std::string> TopicsToRead(const std::map<std::string, std::string>& types,
+                                      const BagOptions& o, const std::string& name) {
+  std::vector<std::string> topics;
+  auto want = [&](const std::string& topic, const std::set<std::string>& allowed) {
+    const auto it = types.find(topic);
+    if (it == types.end()) {
+      std::string list;
+      for (const auto& [t, type] : types)
+        list += (list.empty() ? "" : ", ") + t + " (" + type + ")";
+      throw IoError(name + ": no topic " + topic +
+                    " (the bag has: " + (list.empty() ? std::string("no topics") : list) + ")");
+    }
+    if (allowed.count(it->second) == 0) {
+      std::string list;
+      for (const std::string& a : allowed) list += (list.empty() ? "" : " or ") + a;
+      throw IoError(name + ": " + topic + " is " + it->second + ", not " + list);
+    }
+    topics.push_back(topic);
+  };
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  if (stereo) {
+    want(o.left_image_topic, {kImageType, kCompressedType});
+    want(o.right_image_topic, {kImageType, kCompressedType});
+  } else {
+    want(o.cloud_topic, {kCloudType});
+  }
+  // Clouds take a camera (their stereo error model) only when the bag has both.
+  if (stereo || (types.count(o.left_info_topic) != 0 && types.count(o.right_info_topic) != 0)) {
+    want(o.left_info_topic, {kInfoType});
+    want(o.right_info_topic, {kInfoType});
+  }
+  want(o.odometry_from_tf ? kTfTopic : o.odometry_topic,
+       {o.odometry_from_tf ? kTfType : kOdometryType});
+  if (!o.groundtruth_topic.empty()) want(o.groundtruth_topic, {kOdometryType, kPoseType});
+  if (o.T_body_sensor_from_tf_static) want(kTfStaticTopic, {kTfType});
+  if (!o.origin && types.count(o.navsat_topic) != 0) want(o.navsat_topic, {kNavSatType});
+  return topics;
+}
+
+// What one pass over a bag's messages finds.
+struct Contents {
+  std::optional<sensor_msgs::CameraInfo> left_info;
+  std::optional<sensor_msgs::CameraInfo> right_info;
+  std::vector<PoseSample> odom;   // by time
+  std::vector<PoseSample> truth;  // by time
+  std::vector<StaticEdge> statics;
+  std::set<std::string> tf_pairs;  // "parent -> child" on /tf other than the odometry's
+  std::optional<GeodeticOrigin> fix;
+  std::vector<MessageRef> lefts;  // stereo images, or clouds (in lefts), by stamp
+  std::vector<MessageRef> rights;
+};
+
+// Reads `topics` once, checking image encodings and point layouts on the way.
+// @throw IoError naming `name`, the topic and the stamp.
+Contents ReadContents(rosbag::Bag& bag, const std::vector<std::string>& topics, const BagOptions& o,
+                      const std::string& name) {
+  Contents c;
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  const std::string odom_parent = FrameName(o.odometry_parent_frame);
+  const std::string odom_child = FrameName(o.odometry_child_frame);
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string& topic = m.getTopic();
+    const std::string& type = m.getDataType();
+    auto where = [&](const ros::Time& stamp) {
+      return name + ": " + topic + " at " + StampText(stamp);
+    };
+    if (stereo && (topic == o.left_image_topic || topic == o.right_image_topic)) {
+      // The whole image is deserialised once here, for its stamp and encoding; none is kept.
+      ros::Time stamp;
+      if (type == kCompressedType) {
+        const auto msg = Instantiate<sensor_msgs::CompressedImage>(m, name);
+        stamp = msg->header.stamp;
+        if (!IsSupportedFormat(msg->format)) {
+          throw IoError(where(stamp) + ": unsupported compressed image format '" + msg->format +
+                        "' (png, jpeg)");
+        }
+      } else {
+        const auto msg = Instantiate<sensor_msgs::Image>(m, name);
+        stamp = msg->header.stamp;
+        if (!IsSupportedEncoding(msg->encoding)) {
+          throw IoError(where(stamp) + ": unsupported image encoding '" + msg->encoding +
+                        "' (mono8, rgb8, bgr8, mono16)");
+        }
+      }
+      (topic == o.left_image_topic ? c.lefts : c.rights).push_back({m.getTime(), stamp});
+    } else if (!stereo && topic == o.cloud_topic) {
+      const auto msg = Instantiate<sensor_msgs::PointCloud2>(m, name);
+      CheckCloud(*msg, where(msg->header.stamp));
+      c.lefts.push_back({m.getTime(), msg->header.stamp});
+    } else if (topic == o.left_info_topic || topic == o.right_info_topic) {
+      auto& slot = topic == o.left_info_topic ? c.left_info : c.right_info;
+      if (!slot) slot = *Instantiate<sensor_msgs::CameraInfo>(m, name);
+    } else if (topic == kTfStaticTopic || (o.odometry_from_tf && topic == kTfTopic)) {
+      const auto msg = Instantiate<tf2_msgs::TFMessage>(m, name);
+      for (const geometry_msgs::TransformStamped& t : msg->transforms) {
+        const std::string parent = FrameName(t.header.frame_id);
+        const std::string child = FrameName(t.child_frame_id);
+        const Eigen::Isometry3d T = ToIsometry(t.transform, where(t.header.stamp));
+        if (topic == kTfStaticTopic) {
+          c.statics.push_back({parent, child, T});
+        } else if (parent == odom_parent && child == odom_child) {
+          c.odom.push_back({t.header.stamp.toSec(), T});
+        } else {
+          c.tf_pairs.insert(parent + " -> " + child);
+        }
+      }
+    } else if (topic == o.odometry_topic && !o.odometry_from_tf) {
+      const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
+      c.odom.push_back(
+          {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
+    } else if (topic == o.groundtruth_topic) {
+      if (type == kPoseType) {
+        const auto msg = Instantiate<geometry_msgs::PoseStamped>(m, name);
+        c.truth.push_back(
+            {msg->header.stamp.toSec(), ToIsometry(msg->pose, where(msg->header.stamp))});
+      } else {
+        const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
+        c.truth.push_back(
+            {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
+      }
+    } else if (topic == o.navsat_topic && !c.fix) {
+      const auto msg = Instantiate<sensor_msgs::NavSatFix>(m, name);
+      const bool usable = msg->status.status >= sensor_msgs::NavSatStatus::STATUS_FIX &&
+                          std::isfinite(msg->latitude) && std::isfinite(msg->longitude) &&
+                          std::isfinite(msg->altitude) && std::abs(msg->latitude) <= 90.0 &&
+                          std::abs(msg->longitude) <= 180.0;
+      if (usable) c.fix = GeodeticOrigin{msg->latitude, msg->longitude, msg->altitude};
+    }
+  }
+  auto by_time = [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; };
+  std::stable_sort(c.odom.begin(), c.odom.end(), by_time);
+  std::stable_sort(c.truth.begin(), c.truth.end(), by_time);
+  auto by_stamp = [](const MessageRef& a, const MessageRef& b) { return a.stamp < b.stamp; };
+  std::stable_sort(c.lefts.begin(), c.lefts.end(), by_stamp);
+  std::stable_sort(c.rights.begin(), c.rights.end(), by_stamp);
+  return c;
+}
+
+// T_body_sensor over the static transforms. @throw IoError naming `name` if they do not
+// connect the two frames.
+Eigen::Isometry3d StaticBodySensor(const std::vector<StaticEdge>& statics, const BagOptions& o,
+                                   const std::string& name) {
+  const std::optional<Eigen::Isometry3d> T =
+      Chain(statics, FrameName(o.body_frame), FrameName(o.sensor_frame));
+  if (T) return *T;
+  std::string seen;
+  for (const StaticEdge& e : statics)
+    seen += (seen.empty() ? "" : ", ") + e.parent + " -> " + e.child;
+  throw IoError(name + ": /tf_static does not connect " + o.body_frame + " to " + o.sensor_frame +
+                " (it has: " + (seen.empty() ? "nothing" : seen) + ")");
+}
+
+// Each left (by stamp) with the nearest unused right within `tolerance_s`.
+std::vector<std::pair<MessageRef, MessageRef>> PairImages(const std::vector<MessageRef>& lefts,
+                                                          const std::vector<MessageRef>& rights,
+                                                          double tolerance_s) {
+  std::vector<std::pair<MessageRef, MessageRef>> pairs;
+  std::size_t j = 0;
+  for (const MessageRef& left : lefts) {
+    const double t = left.stamp.toSec();
+    while (j < rights.size() && rights[j].stamp.toSec() < t - tolerance_s) ++j;
+    if (j == rights.size()) break;
+    if (j + 1 < rights.size() &&
+        std::abs(rights[j + 1].stamp.toSec() - t) < std::abs(rights[j].stamp.toSec() - t)) {
+      ++j;
+    }
+    if (std::abs(rights[j].stamp.toSec() - t) > tolerance_s) continue;
+    pairs.emplace_back(left, rights[j]);
+    ++j;
+  }
+  return pairs;
+}
+
+}  // namespace
+
 BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
     : bag_(std::make_unique<Bag>()) {
   bag_->file = bag_file;
@@ -422,16 +611,7 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
   std::error_code error;
   if (!fs::is_regular_file(bag_file, error)) throw IoError(name + ": no such bag file");
 
-  std::optional<sensor_msgs::CameraInfo> left_info;
-  std::optional<sensor_msgs::CameraInfo> right_info;
-  std::vector<PoseSample> odom;
-  std::vector<PoseSample> truth;
-  std::vector<StaticEdge> statics;
-  std::set<std::string> tf_pairs;  // "parent -> child" seen on /tf, for messages
-  std::optional<GeodeticOrigin> fix;
-  std::vector<MessageRef> lefts;
-  std::vector<MessageRef> rights;
-  std::vector<MessageRef> clouds;
+  Contents c;
   try {
     try {
       bag_->bag.open(name, rosbag::bagmode::Read);
@@ -443,205 +623,47 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
       throw IoError(name + ": cannot read the bag, truncated or not a ROS 1 bag (" + e.what() +
                     ")");
     }
-
-    // What the bag holds, to check the topics against and to name in messages.
-    std::map<std::string, std::string> types;
-    {
-      rosbag::View all(bag_->bag);
-      for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-        types.emplace(c->topic, c->datatype);
-      }
-    }
-    auto contents = [&] {
-      std::string list;
-      for (const auto& [topic, type] : types) {
-        list += (list.empty() ? "" : ", ") + topic + " (" + type + ")";
-      }
-      return list.empty() ? std::string("no topics") : list;
-    };
-    auto require = [&](const std::string& topic, const std::set<std::string>& allowed) {
-      const auto it = types.find(topic);
-      if (it == types.end()) {
-        throw IoError(name + ": no topic " + topic + " (the bag has: " + contents() + ")");
-      }
-      if (allowed.count(it->second) == 0) {
-        std::string list;
-        for (const std::string& a : allowed) list += (list.empty() ? "" : " or ") + a;
-        throw IoError(name + ": " + topic + " is " + it->second + ", not " + list);
-      }
-    };
-    std::vector<std::string> topics;
-    auto want = [&](const std::string& topic, const std::set<std::string>& allowed) {
-      require(topic, allowed);
-      topics.push_back(topic);
-    };
-    if (stereo) {
-      want(o.left_image_topic, {kImageType, kCompressedType});
-      want(o.right_image_topic, {kImageType, kCompressedType});
-    } else {
-      want(o.cloud_topic, {kCloudType});
-    }
-    // Clouds take a camera (their stereo error model) only when the bag has both.
-    if (stereo || (types.count(o.left_info_topic) != 0 && types.count(o.right_info_topic) != 0)) {
-      want(o.left_info_topic, {kInfoType});
-      want(o.right_info_topic, {kInfoType});
-    }
-    want(o.odometry_from_tf ? kTfTopic : o.odometry_topic,
-         {o.odometry_from_tf ? kTfType : kOdometryType});
-    if (!o.groundtruth_topic.empty()) want(o.groundtruth_topic, {kOdometryType, kPoseType});
-    if (o.T_body_sensor_from_tf_static) want(kTfStaticTopic, {kTfType});
-    if (!o.origin && types.count(o.navsat_topic) != 0) want(o.navsat_topic, {kNavSatType});
-
-    const std::string odom_parent = FrameName(o.odometry_parent_frame);
-    const std::string odom_child = FrameName(o.odometry_child_frame);
-    rosbag::View view(bag_->bag, rosbag::TopicQuery(topics));
-    for (const rosbag::MessageInstance& m : view) {
-      const std::string& topic = m.getTopic();
-      const std::string& type = m.getDataType();
-      auto where = [&](const ros::Time& stamp) {
-        return name + ": " + topic + " at " + StampText(stamp);
-      };
-      if (stereo && (topic == o.left_image_topic || topic == o.right_image_topic)) {
-        // The whole image is deserialised once here, for its stamp and encoding; none is kept.
-        ros::Time stamp;
-        if (type == kCompressedType) {
-          const auto msg = Instantiate<sensor_msgs::CompressedImage>(m, name);
-          stamp = msg->header.stamp;
-          if (!IsSupportedFormat(msg->format)) {
-            throw IoError(where(stamp) + ": unsupported compressed image format '" + msg->format +
-                          "' (png, jpeg)");
-          }
-        } else {
-          const auto msg = Instantiate<sensor_msgs::Image>(m, name);
-          stamp = msg->header.stamp;
-          if (!IsSupportedEncoding(msg->encoding)) {
-            throw IoError(where(stamp) + ": unsupported image encoding '" + msg->encoding +
-                          "' (mono8, rgb8, bgr8, mono16)");
-          }
-        }
-        (topic == o.left_image_topic ? lefts : rights).push_back({m.getTime(), stamp});
-      } else if (!stereo && topic == o.cloud_topic) {
-        const auto msg = Instantiate<sensor_msgs::PointCloud2>(m, name);
-        CheckCloud(*msg, where(msg->header.stamp));
-        clouds.push_back({m.getTime(), msg->header.stamp});
-      } else if (topic == o.left_info_topic || topic == o.right_info_topic) {
-        auto& slot = topic == o.left_info_topic ? left_info : right_info;
-        if (!slot) slot = *Instantiate<sensor_msgs::CameraInfo>(m, name);
-      } else if (topic == kTfStaticTopic || (o.odometry_from_tf && topic == kTfTopic)) {
-        const auto msg = Instantiate<tf2_msgs::TFMessage>(m, name);
-        for (const geometry_msgs::TransformStamped& t : msg->transforms) {
-          const std::string parent = FrameName(t.header.frame_id);
-          const std::string child = FrameName(t.child_frame_id);
-          const Eigen::Isometry3d T = ToIsometry(t.transform, where(t.header.stamp));
-          if (topic == kTfStaticTopic) {
-            statics.push_back({parent, child, T});
-          } else if (parent == odom_parent && child == odom_child) {
-            odom.push_back({t.header.stamp.toSec(), T});
-          } else {
-            tf_pairs.insert(parent + " -> " + child);
-          }
-        }
-      } else if (topic == o.odometry_topic && !o.odometry_from_tf) {
-        const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
-        odom.push_back(
-            {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
-      } else if (topic == o.groundtruth_topic) {
-        if (type == kPoseType) {
-          const auto msg = Instantiate<geometry_msgs::PoseStamped>(m, name);
-          truth.push_back(
-              {msg->header.stamp.toSec(), ToIsometry(msg->pose, where(msg->header.stamp))});
-        } else {
-          const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
-          truth.push_back(
-              {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
-        }
-      } else if (topic == o.navsat_topic && !fix) {
-        const auto msg = Instantiate<sensor_msgs::NavSatFix>(m, name);
-        const bool usable = msg->status.status >= sensor_msgs::NavSatStatus::STATUS_FIX &&
-                            std::isfinite(msg->latitude) && std::isfinite(msg->longitude) &&
-                            std::isfinite(msg->altitude) && std::abs(msg->latitude) <= 90.0 &&
-                            std::abs(msg->longitude) <= 180.0;
-        if (usable) fix = GeodeticOrigin{msg->latitude, msg->longitude, msg->altitude};
-      }
-    }
+    c = ReadContents(bag_->bag, TopicsToRead(TopicTypes(bag_->bag), o, name), o, name);
   } catch (const rosbag::BagException& e) {
     throw IoError(name + ": cannot read the bag (" + e.what() + ")");
   }
 
   std::optional<CameraModel> camera;
-  if (left_info && right_info) {
-    camera = StereoCamera(*left_info, *right_info, name, o);
+  if (c.left_info && c.right_info) {
+    camera = StereoCamera(*c.left_info, *c.right_info, name, o);
   } else if (stereo) {
     throw IoError(name + ": no sensor_msgs/CameraInfo on " +
-                  (left_info ? o.right_info_topic : o.left_info_topic));
+                  (c.left_info ? o.right_info_topic : o.left_info_topic));
   }
-
-  auto by_time = [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; };
-  std::stable_sort(odom.begin(), odom.end(), by_time);
-  std::stable_sort(truth.begin(), truth.end(), by_time);
-  if (odom.empty() && o.odometry_from_tf) {
+  if (c.odom.empty() && o.odometry_from_tf) {
     std::string seen;
-    for (const std::string& pair : tf_pairs) seen += (seen.empty() ? "" : ", ") + pair;
+    for (const std::string& pair : c.tf_pairs) seen += (seen.empty() ? "" : ", ") + pair;
     throw IoError(name + ": no /tf transform " + o.odometry_parent_frame + " -> " +
                   o.odometry_child_frame + " (/tf has: " + (seen.empty() ? "nothing" : seen) + ")");
   }
-  if (odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
-  if (!o.groundtruth_topic.empty() && truth.empty()) {
+  if (c.odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
+  const bool has_truth = !o.groundtruth_topic.empty();
+  if (has_truth && c.truth.empty()) {
     throw IoError(name + ": no ground truth pose on " + o.groundtruth_topic);
   }
 
-  if (o.T_body_sensor_from_tf_static) {
-    const std::optional<Eigen::Isometry3d> T =
-        Chain(statics, FrameName(o.body_frame), FrameName(o.sensor_frame));
-    if (!T) {
-      std::string seen;
-      for (const StaticEdge& e : statics) {
-        seen += (seen.empty() ? "" : ", ") + e.parent + " -> " + e.child;
-      }
-      throw IoError(name + ": /tf_static does not connect " + o.body_frame + " to " +
-                    o.sensor_frame + " (it has: " + (seen.empty() ? "nothing" : seen) + ")");
-    }
-    info_.T_body_sensor = *T;
-  } else {
-    info_.T_body_sensor = o.T_body_sensor;
-  }
-
-  // A frame needs a pose from each trajectory without extrapolating.
-  const bool has_truth = !o.groundtruth_topic.empty();
-  auto add_frame = [&](const MessageRef& first, const MessageRef& second) {
-    const double t = first.stamp.toSec();
-    if (!Covers(odom, t) || (has_truth && !Covers(truth, t))) {
-      ++skipped_.outside_pose_span;
-      return;
-    }
-    bag_->frames.emplace_back(first, second);
-    odometry_.push_back({t, Interpolate(odom, t), 0});
-    if (has_truth) groundtruth_.push_back({t, Interpolate(truth, t), 0});
-  };
-  auto by_stamp = [](const MessageRef& a, const MessageRef& b) { return a.stamp < b.stamp; };
+  // Frames: pairs or clouds with a pose from each trajectory without extrapolating.
+  std::vector<std::pair<MessageRef, MessageRef>> candidates;
   if (stereo) {
-    // Pairs: each left with the nearest unused right within the tolerance.
-    std::stable_sort(lefts.begin(), lefts.end(), by_stamp);
-    std::stable_sort(rights.begin(), rights.end(), by_stamp);
-    std::size_t j = 0;
-    std::size_t paired = 0;
-    for (const MessageRef& left : lefts) {
-      const double t = left.stamp.toSec();
-      while (j < rights.size() && rights[j].stamp.toSec() < t - o.pair_tolerance_s) ++j;
-      if (j == rights.size()) break;
-      if (j + 1 < rights.size() &&
-          std::abs(rights[j + 1].stamp.toSec() - t) < std::abs(rights[j].stamp.toSec() - t)) {
-        ++j;
-      }
-      if (std::abs(rights[j].stamp.toSec() - t) > o.pair_tolerance_s) continue;
-      add_frame(left, rights[j]);
-      ++paired;
-      ++j;
-    }
-    skipped_.unpaired_images = lefts.size() + rights.size() - 2 * paired;
+    candidates = PairImages(c.lefts, c.rights, o.pair_tolerance_s);
+    skipped_.unpaired_images = c.lefts.size() + c.rights.size() - 2 * candidates.size();
   } else {
-    std::stable_sort(clouds.begin(), clouds.end(), by_stamp);
-    for (const MessageRef& cloud : clouds) add_frame(cloud, cloud);
+    for (const MessageRef& cloud : c.lefts) candidates.emplace_back(cloud, cloud);
+  }
+  for (const auto& candidate : candidates) {
+    const double t = candidate.first.stamp.toSec();
+    if (!Covers(c.odom, t) || (has_truth && !Covers(c.truth, t))) {
+      ++skipped_.outside_pose_span;
+      continue;
+    }
+    bag_->frames.push_back(candidate);
+    odometry_.push_back({t, Interpolate(c.odom, t), 0});
+    if (has_truth) groundtruth_.push_back({t, Interpolate(c.truth, t), 0});
   }
   if (odometry_.empty()) {
     const std::string what =
@@ -655,7 +677,9 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
   info_.directory = bag_file;
   info_.sensor_type = o.sensor_type;
   info_.camera = camera;
-  info_.origin = o.origin ? *o.origin : fix ? *fix : o.default_origin;
+  info_.T_body_sensor =
+      o.T_body_sensor_from_tf_static ? StaticBodySensor(c.statics, o, name) : o.T_body_sensor;
+  info_.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
   info_.body = o.body;
   const double span = odometry_.back().timestamp - odometry_.front().timestamp;
   info_.frame_rate_hz =
