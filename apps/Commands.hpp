@@ -2,10 +2,12 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "config/Config.hpp"
+#include "io/FrameSource.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::apps {
@@ -21,6 +23,9 @@ struct ConfigArgs {
   std::vector<std::string> overrides;
 };
 void AddConfigOptions(CLI::App* cmd, ConfigArgs* args);
+/// config::LoadConfig of `--config` (when given) and the `--set` overrides.
+/// @throw config::ConfigError as LoadConfig.
+config::Config LoadConfigArgs(const ConfigArgs& args);
 
 struct RegisterArgs {
   ConfigArgs config;
@@ -57,13 +62,28 @@ int RunSimulate(const SimulateArgs& args);
 
 struct ReplayArgs {
   ConfigArgs config;
-  std::string sequence;  ///< sequence directory (DESIGN.md §4)
+  std::string sequence;  ///< sequence directory (DESIGN.md §4) or ROS 1 bag
   std::string out;       ///< output directory
   bool force = false;    ///< write into a non-empty directory
 };
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunReplay(const ReplayArgs& args);
+
+struct ImportArgs {
+  ConfigArgs config;
+  std::string recording;  ///< a ROS 1 bag (or a sequence directory)
+  std::string out;        ///< sequence directory to write
+  bool force = false;     ///< replace a non-empty directory
+};
+CLI::App* AddImportCommand(CLI::App* app, ImportArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunImport(const ImportArgs& args);
+
+/// Opens a recording (io::OpenFrameSource with the `bag.` options) and tells stderr, as
+/// `command`, what it skipped. @throw io::IoError naming the recording.
+std::unique_ptr<io::FrameSource> OpenRecording(const std::string& path, const config::Config& cfg,
+                                               const std::string& command);
 
 struct ServeArgs {
   ConfigArgs config;

@@ -1,4 +1,5 @@
-// `rovermap replay SEQUENCE_DIR --out DIR`: the whole pipeline over a recorded sequence.
+// `rovermap replay RECORDING --out DIR`: the whole pipeline over a recorded sequence directory
+// or ROS bag.
 #include <unistd.h>
 
 #include <chrono>
@@ -101,9 +102,11 @@ mapper::PipelineOptions PipelineFrom(const config::Config& cfg) {
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
   CLI::App* cmd = app->add_subcommand(
       "replay",
-      "Run the mapping pipeline over a recorded sequence: registered trajectory, DEM, OctoMap "
-      "and drift report");
-  cmd->add_option("sequence", args->sequence, "Sequence directory (DESIGN.md section 4)")
+      "Run the mapping pipeline over a recorded sequence or ROS bag: registered trajectory, DEM, "
+      "OctoMap and drift report");
+  cmd->add_option("sequence", args->sequence,
+                  "Sequence directory (DESIGN.md section 4) or ROS 1 bag (.bag; options under "
+                  "bag. in the config)")
       ->required();
   cmd->add_option("--out", args->out, "Output directory (created)")->required();
   cmd->add_flag("--force", args->force, "Write into a non-empty DIR (its outputs are replaced)");
@@ -111,23 +114,18 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
   cmd->footer(
       "Writes dem.tif, map.bt, trajectory.tum, odometry.tum, drift.csv, summary.json, dem.png and\n"
       "drift.png into DIR, each atomically; prints summary.json on stdout; progress on stderr.\n"
-      "Exit status: 0 done (bad frames are skipped and reported), 1 bad sequence or cannot\n"
-      "write, 2 usage or config error.\n");
+      "Exit status: 0 done (bad frames are skipped and reported), 1 bad sequence or bag, or\n"
+      "cannot write, 2 usage or config error.\n");
   return cmd;
 }
 
 int RunReplay(const ReplayArgs& args) {
   const auto start = Clock::now();
-  const config::Config cfg =
-      config::LoadConfig(args.config.config_file.empty()
-                             ? std::nullopt
-                             : std::optional<std::filesystem::path>(args.config.config_file),
-                         args.config.overrides);
+  const config::Config cfg = LoadConfigArgs(args.config);
   const std::filesystem::path out(args.out);
   CheckOutputDirectory(out, args.force, "overwrite its outputs");
   // Opening validates the whole recording (calibration, poses, frame files) before any output.
-  const std::unique_ptr<io::FrameSource> source =
-      io::OpenFrameSource(std::filesystem::path(args.sequence));
+  const std::unique_ptr<io::FrameSource> source = OpenRecording(args.sequence, cfg, "replay");
   std::unique_ptr<mapper::Mapper> mapper;
   try {
     mapper = std::make_unique<mapper::Mapper>(source->info(), PipelineFrom(cfg));

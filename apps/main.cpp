@@ -23,6 +23,11 @@ void rovermap::apps::AddConfigOptions(CLI::App* cmd, ConfigArgs* args) {
       ->take_all();
 }
 
+rovermap::config::Config rovermap::apps::LoadConfigArgs(const ConfigArgs& args) {
+  if (args.config_file.empty()) return rovermap::config::LoadConfig(std::nullopt, args.overrides);
+  return rovermap::config::LoadConfig(std::filesystem::path(args.config_file), args.overrides);
+}
+
 int main(int argc, char** argv) {
   // Past a file-size limit (ulimit -f) write() fails with EFBIG, reported like a full disk,
   // instead of the signal killing the process in the middle of a write.
@@ -48,6 +53,8 @@ int main(int argc, char** argv) {
   CLI::App* eval_cmd = AddEvalCommand(&app, &eval_args);
   ReplayArgs replay_args;
   CLI::App* replay_cmd = AddReplayCommand(&app, &replay_args);
+  ImportArgs import_args;
+  CLI::App* import_cmd = AddImportCommand(&app, &import_args);
   ServeArgs serve_args;
   CLI::App* serve_cmd = AddServeCommand(&app, &serve_args);
 
@@ -64,6 +71,7 @@ int main(int argc, char** argv) {
     if (eval_cmd->parsed()) return RunEval(eval_args);
     if (replay_cmd->parsed()) return RunReplay(replay_args);
     if (serve_cmd->parsed()) return RunServe(serve_args);
+    if (import_cmd->parsed()) return RunImport(import_args);
   } catch (const rovermap::config::ConfigError& e) {
     std::cerr << "rovermap: config error: " << e.what() << "\n";
     return kExitUsage;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <sstream>
@@ -237,6 +238,14 @@ static void ValidateCombinations(const Config& config) {
         "sim.image_height: sim.image_width x sim.image_height = " + std::to_string(sim_pixels) +
         " pixels, more than " + std::to_string(detail::kMaxImagePixels));
   }
+  for (const auto& [key, list] :
+       {std::pair{"bag.T_body_sensor_translation", &config.bag.T_body_sensor_translation},
+        std::pair{"bag.T_body_sensor_rpy_deg", &config.bag.T_body_sensor_rpy_deg}}) {
+    if (list->size() != 3) {
+      throw ConfigError(std::string(key) + ": expected a list of 3 numbers (got " +
+                        std::to_string(list->size()) + ")");
+    }
+  }
   if (config.sim.terrain_size_m / config.sim.terrain_cell_m >= 20000) {
     throw ConfigError(
         "sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
@@ -298,6 +307,23 @@ std::string DumpYaml(const Config& config) {
     }
   }
   return yaml;
+}
+
+io::BagOptions BagOptionsFrom(const BagConfig& bag) {
+  constexpr double kDegToRad = M_PI / 180.0;
+  io::BagOptions options = bag;
+  const std::vector<double>& t = bag.T_body_sensor_translation;
+  const std::vector<double>& rpy = bag.T_body_sensor_rpy_deg;
+  options.T_body_sensor.translation() = Eigen::Vector3d(t.at(0), t.at(1), t.at(2));
+  options.T_body_sensor.linear() =
+      (Eigen::AngleAxisd(rpy.at(2) * kDegToRad, Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(rpy.at(1) * kDegToRad, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(rpy.at(0) * kDegToRad, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  options.default_origin = {bag.origin_latitude_deg, bag.origin_longitude_deg,
+                            bag.origin_altitude_m};
+  if (bag.origin_given) options.origin = options.default_origin;
+  return options;
 }
 
 std::vector<std::string> KnownKeys() {

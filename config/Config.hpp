@@ -10,6 +10,7 @@
 #include "dem/ElevationMap.hpp"
 #include "dem/OctoMapOptions.hpp"
 #include "eval/EvalOptions.hpp"
+#include "io/BagOptions.hpp"  // header-only: config does not link io
 #include "mapper/MapperOptions.hpp"
 #include "mapper/ServeOptions.hpp"
 #include "registration/Options.hpp"
@@ -17,6 +18,18 @@
 #include "stereo/StereoOptions.hpp"
 
 namespace rovermap::config {
+
+/// `bag.`: io::BagOptions as keys, plus what BagOptionsFrom turns into its transform and
+/// origin.
+struct BagConfig : io::BagOptions {
+  std::vector<double> T_body_sensor_translation = {0.0, 0.0, 0.0};  ///< [m] x y z
+  /// [deg] R_body_sensor = Rz(y)·Ry(p)·Rx(r) (DESIGN §4): a level, forward-looking camera.
+  std::vector<double> T_body_sensor_rpy_deg = {-90.0, 0.0, -90.0};
+  double origin_latitude_deg = 0.0;   ///< [deg]
+  double origin_longitude_deg = 0.0;  ///< [deg]
+  double origin_altitude_m = 0.0;     ///< [m]
+  bool origin_given = false;          ///< an origin key was set (file or --set)
+};
 
 /// Every module's options, one plain struct per section. Defaults live in the structs; the
 /// keys (`<section>.<field>`) are listed in config/default.yaml and by KnownKeys().
@@ -29,7 +42,12 @@ struct Config {
   eval::EvalOptions eval;
   mapper::MapperOptions mapper;
   mapper::ServeOptions serve;
+  BagConfig bag;
 };
+
+/// The options a bag is read with: T_body_sensor from its translation and angles, the origin
+/// keys as the origin when one was given (else as the fallback after a NavSatFix).
+io::BagOptions BagOptionsFrom(const BagConfig& bag);
 
 /// Builds a Config: the struct defaults, then `file` (nested YAML, one mapping per section),
 /// then each override `key=value` in order (the value is parsed as YAML), so later wins.

@@ -1,5 +1,6 @@
 #include "config/Keys.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -41,6 +42,11 @@ const EnumNames<sim::PathShape> kPathShapeNames = {{"straight", sim::PathShape::
                                                    {"loop", sim::PathShape::kLoop}};
 const EnumNames<mapper::Reference> kReferenceNames = {{"previous", mapper::Reference::kPrevious},
                                                       {"local_map", mapper::Reference::kLocalMap}};
+const EnumNames<io::SensorType> kBagSensorNames = {{"stereo", io::SensorType::kStereo},
+                                                   {"cloud", io::SensorType::kCloud}};
+const EnumNames<bool> kOdometrySourceNames = {{"topic", false}, {"tf", true}};
+const EnumNames<bool> kTBodySensorSourceNames = {{"config", false}, {"tf_static", true}};
+const EnumNames<std::string> kBodyNames = {{"earth", "earth"}, {"moon", "moon"}, {"mars", "mars"}};
 const EnumNames<sim::SensorKind> kSensorKindNames = {{"stereo", sim::SensorKind::kStereo},
                                                      {"cloud", sim::SensorKind::kCloud}};
 
@@ -309,6 +315,56 @@ std::vector<KeyEntry> BuildRegistry() {
   serve.Double("status_interval_s", &V::status_interval_s, "s", AtLeast(0),
                "rewrite status.json at most this often while frames are queued");
 
+  using B = BagConfig;
+  SectionKeys<B> bag(keys, "bag", &Config::bag);
+  bag.Enum<io::SensorType>("sensor", &B::sensor_type, kBagSensorNames,
+                           "frames: left/right image pairs or PointCloud2 messages");
+  bag.Name("left_image_topic", &B::left_image_topic, false,
+           "sensor_msgs/Image or CompressedImage, rectified");
+  bag.Name("right_image_topic", &B::right_image_topic, false, "the right images");
+  bag.Name("left_info_topic", &B::left_info_topic, false,
+           "sensor_msgs/CameraInfo: rectified projection P (clouds: optional)");
+  bag.Name("right_info_topic", &B::right_info_topic, false, "P[0,3] = -fx * baseline");
+  bag.Name("cloud_topic", &B::cloud_topic, false, "sensor_msgs/PointCloud2 (sensor: cloud)");
+  bag.Double("pair_tolerance_s", &B::pair_tolerance_s, "s", AtLeast(0),
+             "left and right stamps this close are a pair");
+  bag.Enum<bool>("odometry_source", &B::odometry_from_tf, kOdometrySourceNames,
+                 "nav_msgs/Odometry on odometry_topic, or /tf parent -> child");
+  bag.Name("odometry_topic", &B::odometry_topic, false, "nav_msgs/Odometry");
+  bag.Name("odometry_parent_frame", &B::odometry_parent_frame, false,
+           "odometry_source: tf: the world-fixed frame");
+  bag.Name("odometry_child_frame", &B::odometry_child_frame, false,
+           "odometry_source: tf: the body frame");
+  bag.Name("groundtruth_topic", &B::groundtruth_topic, true,
+           "nav_msgs/Odometry or geometry_msgs/PoseStamped; \"\" = none");
+  bag.Name("navsat_topic", &B::navsat_topic, false,
+           "sensor_msgs/NavSatFix: its first fix is the origin unless origin_* are set");
+  bag.Enum<bool>("T_body_sensor_source", &B::T_body_sensor_from_tf_static, kTBodySensorSourceNames,
+                 "the keys below, or /tf_static body_frame -> sensor_frame");
+  bag.Name("body_frame", &B::body_frame, false, "T_body_sensor_source: tf_static");
+  bag.Name("sensor_frame", &B::sensor_frame, false,
+           "T_body_sensor_source: tf_static: the left camera (or cloud) frame");
+  bag.DoubleList("T_body_sensor_translation", &B::T_body_sensor_translation, "m", AnyValue(),
+                 "x y z (3 numbers) of the sensor in the body frame");
+  bag.DoubleList(
+      "T_body_sensor_rpy_deg", &B::T_body_sensor_rpy_deg, "deg", AnyValue(),
+      "roll pitch yaw, R = Rz(y)Ry(p)Rx(r); [-90, 0, -90]: a level, forward-looking camera");
+  // Setting any origin key makes the keys the origin (over the bag's NavSatFix).
+  auto origin_key = [&](const std::string& key, double B::*field, const std::string& unit,
+                        Bounds bounds, const std::string& doc) {
+    bag.Double(key, field, unit, bounds, doc);
+    keys.back().parse = [parse = keys.back().parse](const YAML::Node& n, Config& c) {
+      parse(n, c);
+      c.bag.origin_given = true;
+    };
+  };
+  origin_key("origin_latitude_deg", &B::origin_latitude_deg, "deg", Bounds{-90, false, 90, false},
+             "geodetic origin when set; else the first NavSatFix, else this");
+  origin_key("origin_longitude_deg", &B::origin_longitude_deg, "deg",
+             Bounds{-180, false, 180, false}, "geodetic origin");
+  origin_key("origin_altitude_m", &B::origin_altitude_m, "m", AnyValue(), "geodetic origin");
+  bag.Enum<std::string>("body", &B::body, kBodyNames, "the body the rover drove on");
+
   return keys;
 }
 
@@ -417,6 +473,21 @@ bool ParseBool(const YAML::Node& node) {
     throw ValueError("expected true or false (got " + text + ")");
   }
   return value;
+}
+
+std::string ParseName(const YAML::Node& node, bool allow_empty) {
+  const std::string text = node.IsNull() ? std::string() : ScalarText(node);
+  if (text.empty()) {
+    if (allow_empty) return text;
+    throw ValueError("must not be empty");
+  }
+  for (const char c : text) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '/' ||
+                    c == '.' || c == '-';
+    if (!ok)
+      throw ValueError("not a topic or frame name (letters, digits, _ / . -; got " + text + ")");
+  }
+  return text;
 }
 
 std::string FormatDouble(double value) {

@@ -68,6 +68,8 @@ std::string ScalarText(const YAML::Node& node);
 int ParseInt(const YAML::Node& node, const Bounds& bounds);
 double ParseDouble(const YAML::Node& node, const Bounds& bounds);
 bool ParseBool(const YAML::Node& node);
+/// A ROS topic or frame name; a null or "" value is "" when `allow_empty`.
+std::string ParseName(const YAML::Node& node, bool allow_empty);
 /// Shortest text that reads back to the same double, always with a '.' or exponent.
 std::string FormatDouble(double value);
 
@@ -131,7 +133,9 @@ class SectionKeys {
   void DoubleList(const std::string& key, std::vector<double> Section::*field,
                   const std::string& unit, Bounds bounds, const std::string& doc) {
     Add(
-        key, "[" + unit + ", list] " + doc + "; each " + Describe(bounds),
+        key,
+        "[" + unit + ", list] " + doc +
+            (Describe(bounds).empty() ? std::string() : "; each " + Describe(bounds)),
         [s = section_, field, bounds](const YAML::Node& n, Config& c) {
           std::vector<double> values;
           if (n.IsSequence()) {
@@ -146,6 +150,20 @@ class SectionKeys {
           std::string text;
           for (double v : (c.*s).*field) text += (text.empty() ? "" : ", ") + FormatDouble(v);
           return "[" + text + "]";
+        });
+  }
+
+  /// A topic or frame name: letters, digits and _ / . - (empty only if `allow_empty`).
+  void Name(const std::string& key, std::string Section::*field, bool allow_empty,
+            const std::string& doc) {
+    Add(
+        key, "[name] " + doc,
+        [s = section_, field, allow_empty](const YAML::Node& n, Config& c) {
+          (c.*s).*field = ParseName(n, allow_empty);
+        },
+        [s = section_, field](const Config& c) {
+          const std::string& name = (c.*s).*field;
+          return name.empty() ? std::string("\"\"") : name;
         });
   }
 

@@ -1,19 +1,29 @@
 #include "io/BagSource.hpp"
 
+#include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/NavSatFix.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <set>
 #include <utility>
 
 #include "io/IoError.hpp"
@@ -23,17 +33,27 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Where one image is: the time it was recorded at (what a View queries by) and its header
-// stamp (what tells it from others recorded at the same time).
-struct ImageRef {
+constexpr const char* kImageType = "sensor_msgs/Image";
+constexpr const char* kCompressedType = "sensor_msgs/CompressedImage";
+constexpr const char* kInfoType = "sensor_msgs/CameraInfo";
+constexpr const char* kCloudType = "sensor_msgs/PointCloud2";
+constexpr const char* kOdometryType = "nav_msgs/Odometry";
+constexpr const char* kPoseType = "geometry_msgs/PoseStamped";
+constexpr const char* kTfType = "tf2_msgs/TFMessage";
+constexpr const char* kNavSatType = "sensor_msgs/NavSatFix";
+const std::string kTfTopic = "/tf";
+const std::string kTfStaticTopic = "/tf_static";
+
+// Where one image or cloud is: the time it was recorded at (what a View queries by) and its
+// header stamp (what tells it from others recorded at the same time).
+struct MessageRef {
   ros::Time recorded;
   ros::Time stamp;
 };
 
-struct OdomSample {
+struct PoseSample {
   double t = 0.0;
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
 };
 
 std::string StampText(const ros::Time& t) {
@@ -42,42 +62,88 @@ std::string StampText(const ros::Time& t) {
   return buffer;
 }
 
-// Position linearly, rotation by slerp, between the samples around `t` (within their span).
-Eigen::Isometry3d Interpolate(const std::vector<OdomSample>& odom, double t) {
-  auto after = std::upper_bound(odom.begin(), odom.end(), t,
-                                [](double v, const OdomSample& s) { return v < s.t; });
-  if (after == odom.begin()) ++after;  // t is the first sample's time
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const OdomSample& a = *(after - 1);
-  if (after == odom.end() || a.t == t) {
-    T.translation() = a.p;
-    T.linear() = a.q.toRotationMatrix();
-    return T;
+// tf names frames with or without a leading slash.
+std::string FrameName(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+// @throw IoError naming `what` unless `q` is a unit quaternion (within 1e-3).
+Eigen::Isometry3d ToIsometry(double x, double y, double z, const Eigen::Quaterniond& q,
+                             const std::string& what) {
+  if (!(std::abs(q.norm() - 1.0) <= 1e-3)) {
+    throw IoError(what + ": orientation is not a unit quaternion");
   }
-  const OdomSample& b = *after;
-  const double alpha = (t - a.t) / (b.t - a.t);
-  T.translation() = a.p + alpha * (b.p - a.p);
-  T.linear() = a.q.slerp(alpha, b.q).normalized().toRotationMatrix();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  T.linear() = q.normalized().toRotationMatrix();
   return T;
+}
+
+Eigen::Isometry3d ToIsometry(const geometry_msgs::Pose& p, const std::string& what) {
+  const auto& q = p.orientation;
+  return ToIsometry(p.position.x, p.position.y, p.position.z,
+                    Eigen::Quaterniond(q.w, q.x, q.y, q.z), what);
+}
+
+Eigen::Isometry3d ToIsometry(const geometry_msgs::Transform& t, const std::string& what) {
+  const auto& q = t.rotation;
+  return ToIsometry(t.translation.x, t.translation.y, t.translation.z,
+                    Eigen::Quaterniond(q.w, q.x, q.y, q.z), what);
+}
+
+// Position linearly, rotation by slerp, between the samples around `t` (within their span).
+Eigen::Isometry3d Interpolate(const std::vector<PoseSample>& samples, double t) {
+  auto after = std::upper_bound(samples.begin(), samples.end(), t,
+                                [](double v, const PoseSample& s) { return v < s.t; });
+  if (after == samples.begin()) ++after;  // t is the first sample's time
+  const PoseSample& a = *(after - 1);
+  if (after == samples.end() || a.t == t) return a.T;
+  const PoseSample& b = *after;
+  const double alpha = (t - a.t) / (b.t - a.t);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = a.T.translation() + alpha * (b.T.translation() - a.T.translation());
+  const Eigen::Quaterniond qa(a.T.linear());
+  const Eigen::Quaterniond qb(b.T.linear());
+  T.linear() = qa.slerp(alpha, qb).normalized().toRotationMatrix();
+  return T;
+}
+
+// The message `m` as a T. @throw IoError naming `bag` if it is not one (a topic recorded with
+// two types).
+template <typename T>
+auto Instantiate(const rosbag::MessageInstance& m, const std::string& bag) {
+  auto msg = m.instantiate<T>();
+  if (!msg) {
+    throw IoError(bag + ": " + m.getTopic() + " has a " + m.getDataType() + " message, not " +
+                  ros::message_traits::DataType<T>::value());
+  }
+  return msg;
+}
+
+bool Covers(const std::vector<PoseSample>& samples, double t) {
+  return !samples.empty() && t >= samples.front().t && t <= samples.back().t;
+}
+
+bool IsSupportedEncoding(const std::string& encoding) {
+  return encoding == "mono8" || encoding == "rgb8" || encoding == "bgr8" || encoding == "mono16";
+}
+
+// A CompressedImage's format ("png", "jpeg", "bgr8; jpeg compressed bgr8") names its codec.
+bool IsSupportedFormat(const std::string& format) {
+  return format.find("png") != std::string::npos || format.find("jpeg") != std::string::npos ||
+         format.find("jpg") != std::string::npos;
 }
 
 // An 8-bit grey copy of `msg`. @throw IoError naming `what` if it cannot be.
 cv::Mat ToGrey(const sensor_msgs::Image& msg, const std::string& what) {
   const int width = static_cast<int>(msg.width);
   const int height = static_cast<int>(msg.height);
-  int channels = 0;
-  int depth_bytes = 1;
-  if (msg.encoding == "mono8") {
-    channels = 1;
-  } else if (msg.encoding == "rgb8" || msg.encoding == "bgr8") {
-    channels = 3;
-  } else if (msg.encoding == "mono16") {
-    channels = 1;
-    depth_bytes = 2;
-  } else {
+  if (!IsSupportedEncoding(msg.encoding)) {
     throw IoError(what + ": unsupported image encoding '" + msg.encoding +
                   "' (mono8, rgb8, bgr8, mono16)");
   }
+  const int channels = msg.encoding == "rgb8" || msg.encoding == "bgr8" ? 3 : 1;
+  const int depth_bytes = msg.encoding == "mono16" ? 2 : 1;
   const std::size_t row_bytes = static_cast<std::size_t>(width) * channels * depth_bytes;
   if (width <= 0 || height <= 0 || msg.step < row_bytes ||
       msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
@@ -105,6 +171,182 @@ cv::Mat ToGrey(const sensor_msgs::Image& msg, const std::string& what) {
   return grey;
 }
 
+// PNG or JPEG, made 8-bit grey (a 16-bit PNG keeps its high byte, as mono16 does).
+cv::Mat ToGrey(const sensor_msgs::CompressedImage& msg, const std::string& what) {
+  const cv::Mat grey = cv::imdecode(msg.data, cv::IMREAD_GRAYSCALE);
+  if (grey.empty()) throw IoError(what + ": cannot decode the " + msg.format + " image");
+  return grey;
+}
+
+// Byte offsets of x, y, z in a PointCloud2's points, and whether they are float64.
+struct CloudLayout {
+  std::array<std::uint32_t, 3> offset{};
+  bool float64 = false;
+};
+
+// @throw IoError naming `what` unless the cloud has float32 or float64 x, y, z fields inside
+//        its point_step and data for all its points.
+CloudLayout CheckCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
+  CloudLayout layout;
+  const char* names[3] = {"x", "y", "z"};
+  std::optional<std::uint8_t> datatype;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto field =
+        std::find_if(msg.fields.begin(), msg.fields.end(),
+                     [&](const sensor_msgs::PointField& f) { return f.name == names[axis]; });
+    if (field == msg.fields.end()) {
+      throw IoError(what + ": the point cloud has no '" + names[axis] + "' field");
+    }
+    if (field->datatype != sensor_msgs::PointField::FLOAT32 &&
+        field->datatype != sensor_msgs::PointField::FLOAT64) {
+      throw IoError(what + ": field '" + names[axis] + "' has datatype " +
+                    std::to_string(field->datatype) + " (float32 = 7 or float64 = 8 expected)");
+    }
+    if (datatype && *datatype != field->datatype) {
+      throw IoError(what + ": x, y and z fields differ in datatype");
+    }
+    datatype = field->datatype;
+    layout.offset[axis] = field->offset;
+  }
+  layout.float64 = *datatype == sensor_msgs::PointField::FLOAT64;
+  const std::uint32_t size = layout.float64 ? 8 : 4;
+  for (const std::uint32_t offset : layout.offset) {
+    if (offset + size > msg.point_step) {
+      throw IoError(what + ": a coordinate field lies beyond point_step " +
+                    std::to_string(msg.point_step));
+    }
+  }
+  if (msg.is_bigendian) throw IoError(what + ": big-endian point clouds are not supported");
+  const std::size_t row_bytes = static_cast<std::size_t>(msg.width) * msg.point_step;
+  if (msg.row_step < row_bytes ||
+      msg.data.size() < static_cast<std::size_t>(msg.row_step) * msg.height) {
+    throw IoError(what + ": point data does not fit its size (" + std::to_string(msg.width) + "x" +
+                  std::to_string(msg.height) + " points, step " + std::to_string(msg.point_step) +
+                  ", " + std::to_string(msg.data.size()) + " bytes)");
+  }
+  return layout;
+}
+
+// The finite points of a cloud; non-finite ones (no return) are dropped.
+registration::PointCloud ToCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
+  const CloudLayout layout = CheckCloud(msg, what);
+  registration::PointCloud cloud;
+  cloud.points.reserve(static_cast<std::size_t>(msg.width) * msg.height);
+  for (std::uint32_t row = 0; row < msg.height; ++row) {
+    for (std::uint32_t col = 0; col < msg.width; ++col) {
+      const std::uint8_t* point = msg.data.data() + static_cast<std::size_t>(row) * msg.row_step +
+                                  static_cast<std::size_t>(col) * msg.point_step;
+      Eigen::Vector3d p;
+      for (int axis = 0; axis < 3; ++axis) {
+        if (layout.float64) {
+          double v = 0.0;
+          std::memcpy(&v, point + layout.offset[axis], sizeof(v));
+          p[axis] = v;
+        } else {
+          float v = 0.0F;
+          std::memcpy(&v, point + layout.offset[axis], sizeof(v));
+          p[axis] = v;
+        }
+      }
+      if (p.allFinite()) cloud.points.push_back(p);
+    }
+  }
+  return cloud;
+}
+
+// The rectified pair of `left` and `right`. @throw IoError naming `name` and the topic unless
+// both projections have the rectified form [f 0 c Tx; 0 f c 0; 0 0 1 0], share intrinsics and
+// image size, the left has Tx = 0 and the right a positive baseline.
+CameraModel StereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right,
+                         const std::string& name, const BagOptions& o) {
+  auto check_form = [&](const sensor_msgs::CameraInfo& info, const std::string& topic) {
+    const auto& P = info.P;
+    const bool rectified = P[0] > 0.0 && P[5] > 0.0 && P[1] == 0.0 && P[4] == 0.0 && P[8] == 0.0 &&
+                           P[9] == 0.0 && P[10] == 1.0 && P[7] == 0.0 && P[11] == 0.0;
+    if (!rectified) {
+      throw IoError(name + ": " + topic +
+                    ": projection P is not that of a rectified camera ([fx 0 cx Tx; 0 fy cy 0; "
+                    "0 0 1 0] with fx, fy > 0): rovermap needs rectified images");
+    }
+    if (info.width == 0 || info.height == 0) {
+      throw IoError(name + ": " + topic + ": camera info has no image size");
+    }
+  };
+  check_form(left, o.left_info_topic);
+  check_form(right, o.right_info_topic);
+  if (right.width != left.width || right.height != left.height) {
+    throw IoError(name + ": left and right camera info differ in image size (" +
+                  std::to_string(left.width) + "x" + std::to_string(left.height) + " and " +
+                  std::to_string(right.width) + "x" + std::to_string(right.height) +
+                  "): not a rectified pair");
+  }
+  auto same = [](double a, double b) {
+    return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(a));
+  };
+  if (!same(left.P[0], right.P[0]) || !same(left.P[5], right.P[5]) ||
+      !same(left.P[2], right.P[2]) || !same(left.P[6], right.P[6])) {
+    throw IoError(name +
+                  ": left and right projections P differ in fx, fy, cx or cy: not a "
+                  "rectified pair");
+  }
+  if (left.P[3] != 0.0) {
+    throw IoError(name + ": " + o.left_info_topic + ": the left projection has Tx = P[0,3] = " +
+                  std::to_string(left.P[3]) + " (0 for the left camera of a rectified pair)");
+  }
+  CameraModel camera;
+  camera.width = static_cast<int>(left.width);
+  camera.height = static_cast<int>(left.height);
+  camera.fx = left.P[0];
+  camera.fy = left.P[5];
+  camera.cx = left.P[2];
+  camera.cy = left.P[6];
+  camera.baseline_m = 0.0 - right.P[3] / right.P[0];  // 0.0 -: no "-0" in messages
+  if (!(camera.baseline_m > 0.0)) {
+    throw IoError(name + ": " + o.right_info_topic +
+                  ": projection P gives no positive baseline (-P[0,3]/fx = " +
+                  std::to_string(camera.baseline_m) + " m): not a rectified stereo pair");
+  }
+  return camera;
+}
+
+// One static transform: T_parent_child.
+struct StaticEdge {
+  std::string parent;
+  std::string child;
+  Eigen::Isometry3d T;
+};
+
+// T_from_to over the static transforms, walked either way.
+std::optional<Eigen::Isometry3d> Chain(const std::vector<StaticEdge>& edges,
+                                       const std::string& from, const std::string& to) {
+  std::map<std::string, Eigen::Isometry3d> reached = {{from, Eigen::Isometry3d::Identity()}};
+  std::vector<std::string> frontier = {from};
+  while (!frontier.empty()) {
+    const std::string frame = frontier.back();
+    frontier.pop_back();
+    const Eigen::Isometry3d T_from_frame = reached.at(frame);
+    for (const StaticEdge& e : edges) {
+      std::string next;
+      Eigen::Isometry3d T_frame_next;
+      if (e.parent == frame) {
+        next = e.child;
+        T_frame_next = e.T;
+      } else if (e.child == frame) {
+        next = e.parent;
+        T_frame_next = e.T.inverse();
+      } else {
+        continue;
+      }
+      if (reached.count(next) != 0) continue;
+      reached[next] = T_from_frame * T_frame_next;
+      frontier.push_back(next);
+    }
+  }
+  const auto it = reached.find(to);
+  if (it == reached.end()) return std::nullopt;
+  return it->second;
+}
+
 }  // namespace
 
 struct BagSource::Bag {
@@ -112,26 +354,43 @@ struct BagSource::Bag {
   BagOptions options;
   std::mutex mutex;  // rosbag::Bag reads are not thread-safe; Read() is const
   rosbag::Bag bag;
-  std::vector<std::pair<ImageRef, ImageRef>> pairs;  // frame k's left and right
+  // Frame k's left and right image (stereo) or cloud (first).
+  std::vector<std::pair<MessageRef, MessageRef>> frames;
 
-  // The image `ref` on `topic`, grey. @throw IoError naming the bag, topic and stamp.
-  cv::Mat ReadImage(const std::string& topic, const ImageRef& ref, const CameraModel& camera) {
-    const std::string what = file.string() + ": " + topic + " at " + StampText(ref.stamp);
-    sensor_msgs::Image::ConstPtr image;
+  // The message on `topic` recorded at ref.recorded with stamp ref.stamp.
+  // @throw IoError naming the bag, topic and stamp.
+  template <typename Handle>
+  void Find(const std::string& topic, const MessageRef& ref, const std::string& what,
+            Handle&& handle) {
+    bool found = false;
     try {
       rosbag::View view(bag, rosbag::TopicQuery(topic), ref.recorded, ref.recorded);
       for (const rosbag::MessageInstance& m : view) {
-        sensor_msgs::Image::ConstPtr candidate = m.instantiate<sensor_msgs::Image>();
-        if (candidate && candidate->header.stamp == ref.stamp) {
-          image = candidate;
-          break;
-        }
+        found = handle(m);
+        if (found) break;
       }
     } catch (const rosbag::BagException& e) {
       throw IoError(what + ": " + e.what());
     }
-    if (!image) throw IoError(what + ": image not found again at its recording time");
-    cv::Mat grey = ToGrey(*image, what);
+    if (!found) throw IoError(what + ": message not found again at its recording time");
+  }
+
+  // The image `ref` on `topic`, grey. @throw IoError naming the bag, topic and stamp.
+  cv::Mat ReadImage(const std::string& topic, const MessageRef& ref, const CameraModel& camera) {
+    const std::string what = file.string() + ": " + topic + " at " + StampText(ref.stamp);
+    cv::Mat grey;
+    Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
+      if (m.getDataType() == kCompressedType) {
+        const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
+        if (!msg || msg->header.stamp != ref.stamp) return false;
+        grey = ToGrey(*msg, what);
+      } else {
+        const auto msg = m.instantiate<sensor_msgs::Image>();
+        if (!msg || msg->header.stamp != ref.stamp) return false;
+        grey = ToGrey(*msg, what);
+      }
+      return true;
+    });
     if (grey.cols != camera.width || grey.rows != camera.height) {
       throw IoError(what + ": image is " + std::to_string(grey.cols) + "x" +
                     std::to_string(grey.rows) + ", the camera info says " +
@@ -139,7 +398,208 @@ struct BagSource::Bag {
     }
     return grey;
   }
+
+  registration::PointCloud ReadCloud(const MessageRef& ref) {
+    const std::string& topic = options.cloud_topic;
+    const std::string what = file.string() + ": " + topic + " at " + StampText(ref.stamp);
+    registration::PointCloud cloud;
+    Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
+      const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
+      if (!msg || msg->header.stamp != ref.stamp) return false;
+      cloud = ToCloud(*msg, what);
+      return true;
+    });
+    return cloud;
+  }
 };
+
+namespace {
+
+// The topics of `bag` and their message types.
+std::map<std::string, std::string> TopicTypes(rosbag::Bag& bag) {
+  std::map<std::string, std::string> types;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections()) types.emplace(c->topic, c->datatype);
+  return types;
+}
+
+// The topics to read for `o`. @throw IoError naming `name` if one is missing (listing what the
+// bag has) or of another type.
+std::vector<std::string> TopicsToRead(const std::map<std::string, std::string>& types,
+                                      const BagOptions& o, const std::string& name) {
+  std::vector<std::string> topics;
+  auto want = [&](const std::string& topic, const std::set<std::string>& allowed) {
+    const auto it = types.find(topic);
+    if (it == types.end()) {
+      std::string list;
+      for (const auto& [t, type] : types)
+        list += (list.empty() ? "" : ", ") + t + " (" + type + ")";
+      throw IoError(name + ": no topic " + topic +
+                    " (the bag has: " + (list.empty() ? std::string("no topics") : list) + ")");
+    }
+    if (allowed.count(it->second) == 0) {
+      std::string list;
+      for (const std::string& a : allowed) list += (list.empty() ? "" : " or ") + a;
+      throw IoError(name + ": " + topic + " is " + it->second + ", not " + list);
+    }
+    topics.push_back(topic);
+  };
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  if (stereo) {
+    want(o.left_image_topic, {kImageType, kCompressedType});
+    want(o.right_image_topic, {kImageType, kCompressedType});
+  } else {
+    want(o.cloud_topic, {kCloudType});
+  }
+  // Clouds take a camera (their stereo error model) only when the bag has both.
+  if (stereo || (types.count(o.left_info_topic) != 0 && types.count(o.right_info_topic) != 0)) {
+    want(o.left_info_topic, {kInfoType});
+    want(o.right_info_topic, {kInfoType});
+  }
+  want(o.odometry_from_tf ? kTfTopic : o.odometry_topic,
+       {o.odometry_from_tf ? kTfType : kOdometryType});
+  if (!o.groundtruth_topic.empty()) want(o.groundtruth_topic, {kOdometryType, kPoseType});
+  if (o.T_body_sensor_from_tf_static) want(kTfStaticTopic, {kTfType});
+  if (!o.origin && types.count(o.navsat_topic) != 0) want(o.navsat_topic, {kNavSatType});
+  return topics;
+}
+
+// What one pass over a bag's messages finds.
+struct Contents {
+  std::optional<sensor_msgs::CameraInfo> left_info;
+  std::optional<sensor_msgs::CameraInfo> right_info;
+  std::vector<PoseSample> odom;   // by time
+  std::vector<PoseSample> truth;  // by time
+  std::vector<StaticEdge> statics;
+  std::set<std::string> tf_pairs;  // "parent -> child" on /tf other than the odometry's
+  std::optional<GeodeticOrigin> fix;
+  std::vector<MessageRef> lefts;  // stereo images, or clouds (in lefts), by stamp
+  std::vector<MessageRef> rights;
+};
+
+// Reads `topics` once, checking image encodings and point layouts on the way.
+// @throw IoError naming `name`, the topic and the stamp.
+Contents ReadContents(rosbag::Bag& bag, const std::vector<std::string>& topics, const BagOptions& o,
+                      const std::string& name) {
+  Contents c;
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  const std::string odom_parent = FrameName(o.odometry_parent_frame);
+  const std::string odom_child = FrameName(o.odometry_child_frame);
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string& topic = m.getTopic();
+    const std::string& type = m.getDataType();
+    auto where = [&](const ros::Time& stamp) {
+      return name + ": " + topic + " at " + StampText(stamp);
+    };
+    if (stereo && (topic == o.left_image_topic || topic == o.right_image_topic)) {
+      // The whole image is deserialised once here, for its stamp and encoding; none is kept.
+      ros::Time stamp;
+      if (type == kCompressedType) {
+        const auto msg = Instantiate<sensor_msgs::CompressedImage>(m, name);
+        stamp = msg->header.stamp;
+        if (!IsSupportedFormat(msg->format)) {
+          throw IoError(where(stamp) + ": unsupported compressed image format '" + msg->format +
+                        "' (png, jpeg)");
+        }
+      } else {
+        const auto msg = Instantiate<sensor_msgs::Image>(m, name);
+        stamp = msg->header.stamp;
+        if (!IsSupportedEncoding(msg->encoding)) {
+          throw IoError(where(stamp) + ": unsupported image encoding '" + msg->encoding +
+                        "' (mono8, rgb8, bgr8, mono16)");
+        }
+      }
+      (topic == o.left_image_topic ? c.lefts : c.rights).push_back({m.getTime(), stamp});
+    } else if (!stereo && topic == o.cloud_topic) {
+      const auto msg = Instantiate<sensor_msgs::PointCloud2>(m, name);
+      CheckCloud(*msg, where(msg->header.stamp));
+      c.lefts.push_back({m.getTime(), msg->header.stamp});
+    } else if (topic == o.left_info_topic || topic == o.right_info_topic) {
+      auto& slot = topic == o.left_info_topic ? c.left_info : c.right_info;
+      if (!slot) slot = *Instantiate<sensor_msgs::CameraInfo>(m, name);
+    } else if (topic == kTfStaticTopic || (o.odometry_from_tf && topic == kTfTopic)) {
+      const auto msg = Instantiate<tf2_msgs::TFMessage>(m, name);
+      for (const geometry_msgs::TransformStamped& t : msg->transforms) {
+        const std::string parent = FrameName(t.header.frame_id);
+        const std::string child = FrameName(t.child_frame_id);
+        const Eigen::Isometry3d T = ToIsometry(t.transform, where(t.header.stamp));
+        if (topic == kTfStaticTopic) {
+          c.statics.push_back({parent, child, T});
+        } else if (parent == odom_parent && child == odom_child) {
+          c.odom.push_back({t.header.stamp.toSec(), T});
+        } else {
+          c.tf_pairs.insert(parent + " -> " + child);
+        }
+      }
+    } else if (topic == o.odometry_topic && !o.odometry_from_tf) {
+      const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
+      c.odom.push_back(
+          {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
+    } else if (topic == o.groundtruth_topic) {
+      if (type == kPoseType) {
+        const auto msg = Instantiate<geometry_msgs::PoseStamped>(m, name);
+        c.truth.push_back(
+            {msg->header.stamp.toSec(), ToIsometry(msg->pose, where(msg->header.stamp))});
+      } else {
+        const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
+        c.truth.push_back(
+            {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
+      }
+    } else if (topic == o.navsat_topic && !c.fix) {
+      const auto msg = Instantiate<sensor_msgs::NavSatFix>(m, name);
+      const bool usable = msg->status.status >= sensor_msgs::NavSatStatus::STATUS_FIX &&
+                          std::isfinite(msg->latitude) && std::isfinite(msg->longitude) &&
+                          std::isfinite(msg->altitude) && std::abs(msg->latitude) <= 90.0 &&
+                          std::abs(msg->longitude) <= 180.0;
+      if (usable) c.fix = GeodeticOrigin{msg->latitude, msg->longitude, msg->altitude};
+    }
+  }
+  auto by_time = [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; };
+  std::stable_sort(c.odom.begin(), c.odom.end(), by_time);
+  std::stable_sort(c.truth.begin(), c.truth.end(), by_time);
+  auto by_stamp = [](const MessageRef& a, const MessageRef& b) { return a.stamp < b.stamp; };
+  std::stable_sort(c.lefts.begin(), c.lefts.end(), by_stamp);
+  std::stable_sort(c.rights.begin(), c.rights.end(), by_stamp);
+  return c;
+}
+
+// T_body_sensor over the static transforms. @throw IoError naming `name` if they do not
+// connect the two frames.
+Eigen::Isometry3d StaticBodySensor(const std::vector<StaticEdge>& statics, const BagOptions& o,
+                                   const std::string& name) {
+  const std::optional<Eigen::Isometry3d> T =
+      Chain(statics, FrameName(o.body_frame), FrameName(o.sensor_frame));
+  if (T) return *T;
+  std::string seen;
+  for (const StaticEdge& e : statics)
+    seen += (seen.empty() ? "" : ", ") + e.parent + " -> " + e.child;
+  throw IoError(name + ": /tf_static does not connect " + o.body_frame + " to " + o.sensor_frame +
+                " (it has: " + (seen.empty() ? "nothing" : seen) + ")");
+}
+
+// Each left (by stamp) with the nearest unused right within `tolerance_s`.
+std::vector<std::pair<MessageRef, MessageRef>> PairImages(const std::vector<MessageRef>& lefts,
+                                                          const std::vector<MessageRef>& rights,
+                                                          double tolerance_s) {
+  std::vector<std::pair<MessageRef, MessageRef>> pairs;
+  std::size_t j = 0;
+  for (const MessageRef& left : lefts) {
+    const double t = left.stamp.toSec();
+    while (j < rights.size() && rights[j].stamp.toSec() < t - tolerance_s) ++j;
+    if (j == rights.size()) break;
+    if (j + 1 < rights.size() &&
+        std::abs(rights[j + 1].stamp.toSec() - t) < std::abs(rights[j].stamp.toSec() - t)) {
+      ++j;
+    }
+    if (std::abs(rights[j].stamp.toSec() - t) > tolerance_s) continue;
+    pairs.emplace_back(left, rights[j]);
+    ++j;
+  }
+  return pairs;
+}
+
+}  // namespace
 
 BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
     : bag_(std::make_unique<Bag>()) {
@@ -147,110 +607,79 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
   bag_->options = options;
   const std::string name = bag_file.string();
   const BagOptions& o = options;
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  std::error_code error;
+  if (!fs::is_regular_file(bag_file, error)) throw IoError(name + ": no such bag file");
 
-  std::optional<sensor_msgs::CameraInfo> left_info;
-  std::optional<sensor_msgs::CameraInfo> right_info;
-  std::vector<OdomSample> odom;
-  std::vector<ImageRef> lefts;
-  std::vector<ImageRef> rights;
+  Contents c;
   try {
-    bag_->bag.open(name, rosbag::bagmode::Read);
-    const std::vector<std::string> topics = {o.left_image_topic, o.right_image_topic,
-                                             o.left_info_topic, o.right_info_topic,
-                                             o.odometry_topic};
-    rosbag::View view(bag_->bag, rosbag::TopicQuery(topics));
-    for (const rosbag::MessageInstance& m : view) {
-      const std::string& topic = m.getTopic();
-      if (topic == o.left_image_topic || topic == o.right_image_topic) {
-        // The whole image is decoded once here, for its stamp; none is kept.
-        const sensor_msgs::Image::ConstPtr image = m.instantiate<sensor_msgs::Image>();
-        if (!image) throw IoError(name + ": " + topic + " is not sensor_msgs/Image");
-        (topic == o.left_image_topic ? lefts : rights)
-            .push_back({m.getTime(), image->header.stamp});
-      } else if (topic == o.odometry_topic) {
-        const nav_msgs::Odometry::ConstPtr msg = m.instantiate<nav_msgs::Odometry>();
-        if (!msg) throw IoError(name + ": " + topic + " is not nav_msgs/Odometry");
-        const auto& p = msg->pose.pose.position;
-        const auto& q = msg->pose.pose.orientation;
-        const Eigen::Quaterniond rotation(q.w, q.x, q.y, q.z);
-        if (std::abs(rotation.norm() - 1.0) > 1e-3) {
-          throw IoError(name + ": " + topic + " at " + StampText(msg->header.stamp) +
-                        ": orientation is not a unit quaternion");
-        }
-        odom.push_back({msg->header.stamp.toSec(), {p.x, p.y, p.z}, rotation.normalized()});
-      } else {
-        const sensor_msgs::CameraInfo::ConstPtr msg = m.instantiate<sensor_msgs::CameraInfo>();
-        if (!msg) throw IoError(name + ": " + topic + " is not sensor_msgs/CameraInfo");
-        auto& slot = topic == o.left_info_topic ? left_info : right_info;
-        if (!slot) slot = *msg;
-      }
+    try {
+      bag_->bag.open(name, rosbag::bagmode::Read);
+    } catch (const rosbag::BagUnindexedException&) {
+      throw IoError(name +
+                    ": the bag is not indexed (its recording was cut off or not closed): "
+                    "`rosbag reindex` it first");
+    } catch (const rosbag::BagException& e) {
+      throw IoError(name + ": cannot read the bag, truncated or not a ROS 1 bag (" + e.what() +
+                    ")");
     }
+    c = ReadContents(bag_->bag, TopicsToRead(TopicTypes(bag_->bag), o, name), o, name);
   } catch (const rosbag::BagException& e) {
-    throw IoError(name + ": " + e.what());
+    throw IoError(name + ": cannot read the bag (" + e.what() + ")");
   }
 
-  if (!left_info) throw IoError(name + ": no sensor_msgs/CameraInfo on " + o.left_info_topic);
-  if (!right_info) throw IoError(name + ": no sensor_msgs/CameraInfo on " + o.right_info_topic);
-  CameraModel camera;
-  camera.width = static_cast<int>(left_info->width);
-  camera.height = static_cast<int>(left_info->height);
-  camera.fx = left_info->P[0];
-  camera.fy = left_info->P[5];
-  camera.cx = left_info->P[2];
-  camera.cy = left_info->P[6];
-  const double right_fx = right_info->P[0];
-  camera.baseline_m = right_fx > 0.0 ? -right_info->P[3] / right_fx : 0.0;
-  if (!(camera.fx > 0.0 && camera.fy > 0.0 && camera.width > 0 && camera.height > 0)) {
-    throw IoError(name + ": " + o.left_info_topic +
-                  ": needs a projection P with fx, fy > 0 and a width and height");
+  std::optional<CameraModel> camera;
+  if (c.left_info && c.right_info) {
+    camera = StereoCamera(*c.left_info, *c.right_info, name, o);
+  } else if (stereo) {
+    throw IoError(name + ": no sensor_msgs/CameraInfo on " +
+                  (c.left_info ? o.right_info_topic : o.left_info_topic));
   }
-  if (!(camera.baseline_m > 0.0)) {
-    throw IoError(name + ": " + o.right_info_topic +
-                  ": projection P gives no positive baseline (-P[0,3]/fx)");
+  if (c.odom.empty() && o.odometry_from_tf) {
+    std::string seen;
+    for (const std::string& pair : c.tf_pairs) seen += (seen.empty() ? "" : ", ") + pair;
+    throw IoError(name + ": no /tf transform " + o.odometry_parent_frame + " -> " +
+                  o.odometry_child_frame + " (/tf has: " + (seen.empty() ? "nothing" : seen) + ")");
   }
-  if (right_info->width != left_info->width || right_info->height != left_info->height) {
-    throw IoError(name + ": left and right camera info differ in image size");
+  if (c.odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
+  const bool has_truth = !o.groundtruth_topic.empty();
+  if (has_truth && c.truth.empty()) {
+    throw IoError(name + ": no ground truth pose on " + o.groundtruth_topic);
   }
 
-  std::stable_sort(odom.begin(), odom.end(),
-                   [](const OdomSample& a, const OdomSample& b) { return a.t < b.t; });
-  if (odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
-
-  // Pairs: each left with the nearest unused right within the tolerance.
-  auto by_stamp = [](const ImageRef& a, const ImageRef& b) { return a.stamp < b.stamp; };
-  std::stable_sort(lefts.begin(), lefts.end(), by_stamp);
-  std::stable_sort(rights.begin(), rights.end(), by_stamp);
-  std::size_t j = 0;
-  for (const ImageRef& left : lefts) {
-    const double t = left.stamp.toSec();
-    while (j < rights.size() && rights[j].stamp.toSec() < t - o.pair_tolerance_s) ++j;
-    if (j == rights.size()) break;
-    if (j + 1 < rights.size() &&
-        std::abs(rights[j + 1].stamp.toSec() - t) < std::abs(rights[j].stamp.toSec() - t)) {
-      ++j;
+  // Frames: pairs or clouds with a pose from each trajectory without extrapolating.
+  std::vector<std::pair<MessageRef, MessageRef>> candidates;
+  if (stereo) {
+    candidates = PairImages(c.lefts, c.rights, o.pair_tolerance_s);
+    skipped_.unpaired_images = c.lefts.size() + c.rights.size() - 2 * candidates.size();
+  } else {
+    for (const MessageRef& cloud : c.lefts) candidates.emplace_back(cloud, cloud);
+  }
+  for (const auto& candidate : candidates) {
+    const double t = candidate.first.stamp.toSec();
+    if (!Covers(c.odom, t) || (has_truth && !Covers(c.truth, t))) {
+      ++skipped_.outside_pose_span;
+      continue;
     }
-    if (std::abs(rights[j].stamp.toSec() - t) > o.pair_tolerance_s) continue;
-    // Only where odometry gives a pose without extrapolating.
-    if (t >= odom.front().t && t <= odom.back().t) {
-      bag_->pairs.emplace_back(left, rights[j]);
-      StampedPose pose;
-      pose.timestamp = t;
-      pose.T_world_body = Interpolate(odom, t);
-      odometry_.push_back(pose);
-    }
-    ++j;
+    bag_->frames.push_back(candidate);
+    odometry_.push_back({t, Interpolate(c.odom, t), 0});
+    if (has_truth) groundtruth_.push_back({t, Interpolate(c.truth, t), 0});
   }
   if (odometry_.empty()) {
-    throw IoError(name + ": no left/right image pair within " + std::to_string(o.pair_tolerance_s) +
-                  " s of each other and within the odometry's time span (" + o.left_image_topic +
-                  ", " + o.right_image_topic + ")");
+    const std::string what =
+        stereo ? "left/right image pair within " + std::to_string(o.pair_tolerance_s) +
+                     " s of each other (" + o.left_image_topic + ", " + o.right_image_topic + ")"
+               : "point cloud on " + o.cloud_topic;
+    throw IoError(name + ": no " + what + " within the time span of the odometry" +
+                  (has_truth ? " and the ground truth" : ""));
   }
 
   info_.directory = bag_file;
-  info_.sensor_type = SensorType::kStereo;
+  info_.sensor_type = o.sensor_type;
   info_.camera = camera;
-  info_.T_body_sensor = o.T_body_sensor;
-  info_.origin = o.origin;
+  info_.T_body_sensor =
+      o.T_body_sensor_from_tf_static ? StaticBodySensor(c.statics, o, name) : o.T_body_sensor;
+  info_.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
   info_.body = o.body;
   const double span = odometry_.back().timestamp - odometry_.front().timestamp;
   info_.frame_rate_hz =
@@ -261,10 +690,14 @@ BagSource::~BagSource() = default;
 
 void BagSource::LoadFrame(Frame* frame) const {
   frame->file = bag_->file;
-  const auto& [left, right] = bag_->pairs[frame->index];
+  const auto& [first, second] = bag_->frames[frame->index];
   const std::lock_guard<std::mutex> lock(bag_->mutex);
-  frame->left = bag_->ReadImage(bag_->options.left_image_topic, left, *info_.camera);
-  frame->right = bag_->ReadImage(bag_->options.right_image_topic, right, *info_.camera);
+  if (info_.sensor_type == SensorType::kCloud) {
+    frame->cloud = bag_->ReadCloud(first);
+    return;
+  }
+  frame->left = bag_->ReadImage(bag_->options.left_image_topic, first, *info_.camera);
+  frame->right = bag_->ReadImage(bag_->options.right_image_topic, second, *info_.camera);
 }
 
 }  // namespace rovermap::io

@@ -11,11 +11,10 @@
 
 #include "io/CameraModel.hpp"
 #include "io/Georeference.hpp"  // GeodeticOrigin
+#include "io/SensorType.hpp"
 #include "registration/PointCloud.hpp"
 
 namespace rovermap::io {
-
-enum class SensorType { kStereo, kCloud };
 
 /// Everything sequence.yaml says (or what a recording in another form says instead).
 struct SequenceInfo {

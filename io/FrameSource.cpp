@@ -2,8 +2,13 @@
 
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
+#include "io/IoError.hpp"
 #include "io/Sequence.hpp"
+#ifdef ROVERMAP_WITH_ROSBAG
+#include "io/BagSource.hpp"
+#endif
 
 namespace rovermap::io {
 
@@ -28,8 +33,20 @@ bool IndexedFrameSource::Next(Frame* frame) {
   return true;
 }
 
-std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path) {
-  return std::make_unique<SequenceReader>(path);
+std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
+                                             const BagOptions& bag_options) {
+  std::error_code error;
+  if (path.extension() != ".bag" || std::filesystem::is_directory(path, error)) {
+    return std::make_unique<SequenceReader>(path);
+  }
+#ifdef ROVERMAP_WITH_ROSBAG
+  return std::make_unique<BagSource>(path, bag_options);
+#else
+  (void)bag_options;
+  throw IoError(path.string() +
+                ": this rovermap was built without ROS bag support (configure with "
+                "-DROVERMAP_WITH_ROSBAG=ON; scripts/install_deps.sh installs the ROS packages)");
+#endif
 }
 
 }  // namespace rovermap::io

@@ -7,10 +7,17 @@
 #include <memory>
 #include <vector>
 
+#include "io/BagOptions.hpp"
 #include "io/Frame.hpp"
 #include "io/Tum.hpp"
 
 namespace rovermap::io {
+
+/// What a recording held that gave no frame; zero for a sequence directory.
+struct SkippedFrames {
+  std::size_t outside_pose_span = 0;  ///< stamps outside the odometry's (or truth's) time span
+  std::size_t unpaired_images = 0;    ///< left or right images without a partner in tolerance
+};
 
 class FrameSource {
  public:
@@ -26,6 +33,7 @@ class FrameSource {
   /// Empty, or one pose per frame like odometry().
   virtual const std::vector<StampedPose>& groundtruth() const = 0;
   bool has_groundtruth() const { return !groundtruth().empty(); }
+  virtual SkippedFrames skipped() const { return {}; }
 
   /// Reads the next frame into `frame` (replacing its contents).
   /// @return false (and leaves `frame` alone) when every frame has been read.
@@ -67,8 +75,11 @@ class IndexedFrameSource : public FrameSource {
   std::size_t next_ = 0;
 };
 
-/// Opens the recording at `path`: today a sequence directory (DESIGN.md §4).
-/// @throw IoError naming the file (and line) at fault.
-std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path);
+/// Opens the recording at `path`: a ROS 1 bag (a file named *.bag, read by `bag_options`) or a
+/// sequence directory (DESIGN.md §4).
+/// @throw IoError naming the file (and line) at fault, or saying that this build has no bag
+///        support (ROVERMAP_WITH_ROSBAG off).
+std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
+                                             const BagOptions& bag_options = {});
 
 }  // namespace rovermap::io

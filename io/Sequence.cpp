@@ -5,10 +5,13 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 #include "config/ConfigError.hpp"
 #include "config/SequenceYaml.hpp"
+#include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 
@@ -62,6 +65,55 @@ void ReadFrameData(const fs::path& stem, const SequenceInfo& info, Frame* frame)
   } else {
     frame->file = stem.string() + ".ply";
     frame->cloud = ReadPly(frame->file, NonFinite::kKeep);  // the mapper drops and counts them
+  }
+}
+
+void WriteSequenceYaml(const fs::path& dir, const SequenceInfo& info, const std::string& header) {
+  const Eigen::Quaterniond q(info.T_body_sensor.linear());
+  const Eigen::Vector3d& t = info.T_body_sensor.translation();
+  char buffer[1024];
+  std::string yaml = "# " + header + "\n";
+  std::snprintf(buffer, sizeof(buffer),
+                "sensor:\n"
+                "  type: %s\n"
+                "  T_body_sensor:\n"
+                "    translation: [%.17g, %.17g, %.17g]\n"
+                "    quaternion: [%.17g, %.17g, %.17g, %.17g]\n",
+                info.sensor_type == SensorType::kCloud ? "cloud" : "stereo", t.x(), t.y(), t.z(),
+                q.x(), q.y(), q.z(), q.w());
+  yaml += buffer;
+  if (info.camera) {
+    const CameraModel& c = *info.camera;
+    std::snprintf(buffer, sizeof(buffer),
+                  "camera:\n"
+                  "  width: %d\n  height: %d\n  fx: %.17g\n  fy: %.17g\n  cx: %.17g\n  cy: %.17g\n"
+                  "  baseline: %.17g\n",
+                  c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.baseline_m);
+    yaml += buffer;
+  }
+  std::snprintf(buffer, sizeof(buffer),
+                "origin:\n  latitude: %.17g\n  longitude: %.17g\n  altitude: %.17g\n"
+                "frame_rate: %.17g\n",
+                info.origin.latitude_deg, info.origin.longitude_deg, info.origin.altitude_m,
+                info.frame_rate_hz);
+  yaml += buffer;
+  if (info.body != "earth") yaml += "body: " + info.body + "\n";
+  WriteFileAtomically(dir / "sequence.yaml", yaml);
+}
+
+void WriteFrameData(const fs::path& stem, const SequenceInfo& info, const Frame& frame) {
+  if (info.sensor_type == SensorType::kCloud) {
+    WritePly(stem.string() + ".ply", frame.cloud);
+    return;
+  }
+  for (const bool left : {true, false}) {
+    std::vector<unsigned char> png;
+    const std::string file = stem.string() + (left ? ".left.png" : ".right.png");
+    if (!cv::imencode(".png", left ? frame.left : frame.right, png)) {
+      throw IoError(file + ": cannot encode the image as PNG");
+    }
+    WriteFileAtomically(file,
+                        std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   }
 }
 

@@ -38,6 +38,17 @@ cv::Mat ReadStereoImage(const std::filesystem::path& file, const CameraModel& ca
 /// frame into `frame` (its poses are left alone). @throw IoError naming the file.
 void ReadFrameData(const std::filesystem::path& stem, const SequenceInfo& info, Frame* frame);
 
+/// Writes `dir`/sequence.yaml for `info` (quaternion form, full precision; `camera:` when
+/// info has one, `body:` when not earth), its first line the comment "# `header`".
+/// @throw IoError naming the file if it cannot be written.
+void WriteSequenceYaml(const std::filesystem::path& dir, const SequenceInfo& info,
+                       const std::string& header);
+
+/// Writes the images (`stem`.left.png and .right.png) or the points (`stem`.ply) of `frame`, as
+/// ReadFrameData reads them, each file atomically. @throw IoError naming the file.
+void WriteFrameData(const std::filesystem::path& stem, const SequenceInfo& info,
+                    const Frame& frame);
+
 /// Opens and validates a sequence; then Next() reads frames in index order (groundtruth() is
 /// empty when the sequence has no groundtruth.tum).
 ///

@@ -249,49 +249,32 @@ SimulateResult Simulator::WriteSequence(
   fs::create_directories(dir / "frames", error);
   if (error) throw io::IoError((dir / "frames").string() + ": cannot create: " + error.message());
 
-  const io::CameraModel c = camera();
-  const Eigen::Quaterniond q(T_body_sensor_.linear());
-  const Eigen::Vector3d& t = T_body_sensor_.translation();
-  char yaml[2048];
-  std::snprintf(yaml, sizeof(yaml),
-                "# Written by rovermap simulate (seed %d): DESIGN.md section 4.\n"
-                "sensor:\n"
-                "  type: %s\n"
-                "  T_body_sensor:\n"
-                "    translation: [%.17g, %.17g, %.17g]\n"
-                "    quaternion: [%.17g, %.17g, %.17g, %.17g]\n"
-                "camera:\n"
-                "  width: %d\n  height: %d\n  fx: %.17g\n  fy: %.17g\n  cx: %.17g\n  cy: %.17g\n"
-                "  baseline: %.17g\n"
-                "origin:\n  latitude: %.17g\n  longitude: %.17g\n  altitude: %.17g\n"
-                "frame_rate: %.17g\n",
-                o.seed, o.sensor == SensorKind::kCloud ? "cloud" : "stereo", t.x(), t.y(), t.z(),
-                q.x(), q.y(), q.z(), q.w(), c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.baseline_m,
-                o.origin_latitude_deg, o.origin_longitude_deg, o.origin_altitude_m,
-                o.frame_rate_hz);
-  io::WriteFileAtomically(dir / "sequence.yaml", yaml);
+  io::SequenceInfo info;
+  info.sensor_type =
+      o.sensor == SensorKind::kCloud ? io::SensorType::kCloud : io::SensorType::kStereo;
+  info.camera = camera();
+  info.T_body_sensor = T_body_sensor_;
+  info.origin = {o.origin_latitude_deg, o.origin_longitude_deg, o.origin_altitude_m};
+  info.frame_rate_hz = o.frame_rate_hz;
+  io::WriteSequenceYaml(
+      dir, info,
+      "Written by rovermap simulate (seed " + std::to_string(o.seed) + "): DESIGN.md section 4.");
 
   SimulateResult result;
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t k = 0; k < truth_.size(); ++k) {
     const fs::path stem = dir / "frames" / io::FrameStem(k);
+    io::Frame frame;
     if (o.sensor == SensorKind::kStereo) {
-      cv::Mat left, right;
-      RenderStereo(k, &left, &right);
-      for (int eye = 0; eye < 2; ++eye) {
-        std::vector<unsigned char> png;
-        cv::imencode(".png", eye == 0 ? left : right, png);
-        io::WriteFileAtomically(
-            stem.string() + (eye == 0 ? ".left.png" : ".right.png"),
-            std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
-      }
+      RenderStereo(k, &frame.left, &frame.right);
     } else {
       SimCloud cloud = RenderCloud(k);
       cloud.cloud.covariances.clear();  // PLY carries points and normals
-      io::WritePly(stem.string() + ".ply", cloud.cloud);
-      result.points += cloud.cloud.size();
+      frame.cloud = std::move(cloud.cloud);
+      result.points += frame.cloud.size();
       result.outliers += cloud.outliers;
     }
+    io::WriteFrameData(stem, info, frame);
     if (progress) progress(k + 1, truth_.size());
   }
   result.render_ms =

@@ -224,7 +224,11 @@ TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
       "64",
       "0.75",
       "none",
-      "local_map"};  // octomap.prob_hit: in (0.5, 1); acceleration; reference
+      "local_map",  // octomap.prob_hit: in (0.5, 1); acceleration; reference
+      "tf",
+      "tf_static",
+      "moon",
+      "[1.0, 2.0, 3.0]"};  // bag.odometry_source, T_body_sensor_source, body, 3-vectors
   for (const std::string& key : KnownKeys()) {
     // geometry=curve is only valid with point_to_point residuals: start from there.
     std::vector<std::string> base;
@@ -248,6 +252,57 @@ TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
       break;
     }
     EXPECT_TRUE(changed) << key << " could not be changed";
+  }
+}
+
+TEST(Keys, BagKeysMapToBagOptions) {
+  const Config defaults;
+  io::BagOptions options = BagOptionsFrom(defaults.bag);
+  EXPECT_EQ(options.left_image_topic, io::BagOptions().left_image_topic);
+  EXPECT_FALSE(options.origin.has_value());  // no origin key: the bag's NavSatFix first
+  // The default T_body_sensor: a level, forward-looking OpenCV camera (z forward = body x).
+  EXPECT_TRUE(options.T_body_sensor.linear().col(2).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  EXPECT_TRUE(options.T_body_sensor.linear().col(0).isApprox(-Eigen::Vector3d::UnitY(), 1e-12));
+
+  const Config config = LoadConfig(
+      std::nullopt, {"bag.sensor=cloud", "bag.cloud_topic=/velodyne_points",
+                     "bag.odometry_source=tf", "bag.odometry_parent_frame=map",
+                     "bag.T_body_sensor_source=tf_static", "bag.groundtruth_topic=/vicon/rover",
+                     "bag.pair_tolerance_s=0.02", "bag.T_body_sensor_translation=[0.5, 0, 1.2]",
+                     "bag.origin_altitude_m=12.5", "bag.body=mars"});
+  options = BagOptionsFrom(config.bag);
+  EXPECT_EQ(options.sensor_type, io::SensorType::kCloud);
+  EXPECT_EQ(options.cloud_topic, "/velodyne_points");
+  EXPECT_TRUE(options.odometry_from_tf);
+  EXPECT_EQ(options.odometry_parent_frame, "map");
+  EXPECT_TRUE(options.T_body_sensor_from_tf_static);
+  EXPECT_EQ(options.groundtruth_topic, "/vicon/rover");
+  EXPECT_EQ(options.pair_tolerance_s, 0.02);
+  EXPECT_EQ(options.T_body_sensor.translation(), Eigen::Vector3d(0.5, 0.0, 1.2));
+  EXPECT_EQ(options.body, "mars");
+  // One origin key given: the keys are the origin, over any NavSatFix.
+  ASSERT_TRUE(options.origin.has_value());
+  EXPECT_EQ(options.origin->altitude_m, 12.5);
+  EXPECT_EQ(options.origin->latitude_deg, 0.0);
+  // An empty ground-truth topic is none.
+  EXPECT_TRUE(LoadConfig(std::nullopt, {"bag.groundtruth_topic="}).bag.groundtruth_topic.empty());
+}
+
+TEST(ConfigErrors, BagKeysAreValidatedNamingTheKey) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"bag.pair_tolerance_s=-0.1", "bag.pair_tolerance_s: must be >= 0 (got -0.1)"},
+      {"bag.odometry_source=imu", "bag.odometry_source: must be one of topic|tf (got imu)"},
+      {"bag.left_image_topic=", "bag.left_image_topic: must not be empty"},
+      {"bag.odometry_topic=odom topic", "bag.odometry_topic: not a topic or frame name"},
+      {"bag.T_body_sensor_rpy_deg=[0, 0]",
+       "bag.T_body_sensor_rpy_deg: expected a list of 3 numbers (got 2)"},
+      {"bag.origin_latitude_deg=91", "bag.origin_latitude_deg: must be in [-90, 90] (got 91)"},
+      {"bag.left_image=/x", "bag.left_image: unknown key (did you mean bag.left_image_topic?)"},
+  };
+  for (const auto& [override_text, message] : cases) {
+    const std::string got =
+        rovermap::testing::ErrorOf<ConfigError>([&] { LoadConfig(std::nullopt, {override_text}); });
+    EXPECT_TRUE(rovermap::testing::Contains(got, message)) << override_text;
   }
 }
 

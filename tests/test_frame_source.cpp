@@ -3,12 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
 
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
 #include "io/Sequence.hpp"
+#include "tests/support/ErrorText.hpp"
+#include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::io {
 namespace {
@@ -62,6 +65,18 @@ TEST(FrameSource, ASequenceDirectoryGivesTheFramesOfSequenceReaderCloud) {
 
 TEST(FrameSource, OpeningWhatIsNotARecordingThrowsIoError) {
   EXPECT_THROW(OpenFrameSource(kData / "no_such_sequence"), IoError);
+}
+
+TEST(FrameSource, ABagFileOpensAsABagOrSaysTheBuildHasNoBagSupport) {
+  const fs::path file = rovermap::testing::ScratchDir() / "notes.bag";
+  std::ofstream(file) << "not a bag\n";
+  const std::string message = rovermap::testing::ErrorOf<IoError>([&] { OpenFrameSource(file); });
+#ifdef ROVERMAP_WITH_ROSBAG
+  EXPECT_TRUE(rovermap::testing::Contains(message, file.string() + ": cannot read the bag"));
+#else
+  EXPECT_TRUE(rovermap::testing::Contains(
+      message, file.string() + ": this rovermap was built without ROS bag support"));
+#endif
 }
 
 }  // namespace
