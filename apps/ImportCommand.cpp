@@ -20,6 +20,7 @@
 #include "io/IoError.hpp"
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
+#include "mapper/FrameLoader.hpp"
 
 namespace rovermap::apps {
 namespace {
@@ -43,7 +44,8 @@ fs::path MakeSiblingDirectory(const fs::path& out, const std::string& kind) {
 
 // The frames of `source` into `dir`; unreadable ones are left out (the rest renumbered).
 // @return how many were left out.
-std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir) {
+std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir,
+                          std::size_t* dropped_nonfinite) {
   std::error_code error;
   fs::create_directories(dir / "frames", error);
   if (error) throw io::IoError((dir / "frames").string() + ": cannot create: " + error.message());
@@ -61,6 +63,8 @@ std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir) {
       ++unreadable;
       continue;
     }
+    // A sequence's PLY holds the finite points (DESIGN.md §4); the rest are counted.
+    *dropped_nonfinite += mapper::DropNonFinite(&frame.cloud);
     io::WriteFrameData(dir / "frames" / io::FrameStem(odometry.size()), info, frame);
     odometry.push_back(source->odometry()[frame.index]);
     if (source->has_groundtruth()) truth.push_back(source->groundtruth()[frame.index]);
@@ -116,8 +120,9 @@ int RunImport(const ImportArgs& args) {
 
   const fs::path temp = MakeSiblingDirectory(out, "import");
   std::size_t unreadable = 0;
+  std::size_t dropped_nonfinite = 0;
   try {
-    unreadable = WriteSequence(source.get(), temp);
+    unreadable = WriteSequence(source.get(), temp, &dropped_nonfinite);
     // An existing SEQ (empty, or --force) moves aside first, so SEQ is never half old, half new.
     std::error_code error;
     if (fs::exists(out, error)) {
@@ -146,6 +151,7 @@ int RunImport(const ImportArgs& args) {
       {"frames", frames},
       {"sensor", source->info().sensor_type == io::SensorType::kCloud ? "cloud" : "stereo"},
       {"groundtruth", source->has_groundtruth()},
+      {"dropped_nonfinite", dropped_nonfinite},
       {"skipped",
        {{"outside_pose_span", skipped.outside_pose_span},
         {"unpaired_images", skipped.unpaired_images},

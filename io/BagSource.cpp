@@ -227,7 +227,8 @@ CloudLayout CheckCloud(const sensor_msgs::PointCloud2& msg, const std::string& w
   return layout;
 }
 
-// The finite points of a cloud; non-finite ones (no return) are dropped.
+// Every point of a cloud, non-finite ones (no return) included: the mapper drops and counts
+// them, as for a sequence's PLY frames (DESIGN.md §9).
 registration::PointCloud ToCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
   const CloudLayout layout = CheckCloud(msg, what);
   registration::PointCloud cloud;
@@ -248,7 +249,7 @@ registration::PointCloud ToCloud(const sensor_msgs::PointCloud2& msg, const std:
           p[axis] = v;
         }
       }
-      if (p.allFinite()) cloud.points.push_back(p);
+      cloud.points.push_back(p);
     }
   }
   return cloud;

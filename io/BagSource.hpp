@@ -23,7 +23,8 @@ namespace rovermap::io {
 /// ground truth's, when there is one); its timestamp is that stamp and its poses are
 /// interpolated there (position linearly, rotation by slerp). Images may be mono8, rgb8, bgr8
 /// (made grey), mono16 (high byte kept) or PNG/JPEG CompressedImage; clouds need float32 or
-/// float64 x, y, z fields (non-finite points are dropped). skipped() counts what gave no frame.
+/// float64 x, y, z fields (non-finite points are kept, for the mapper to drop and count). skipped()
+/// counts what gave no frame.
 class BagSource : public IndexedFrameSource {
  public:
   /// @throw IoError naming the bag if it cannot be read (missing, truncated, unindexed), lacks a

@@ -8,29 +8,6 @@
 namespace rovermap::mapper {
 namespace {
 
-// Keeps the points (with their attributes) that are finite; returns how many were dropped.
-std::size_t DropNonFinite(registration::PointCloud* cloud) {
-  const bool has_normals = cloud->HasNormals();
-  const bool has_cov = cloud->HasCovariances();
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < cloud->size(); ++i) {
-    const bool finite = cloud->points[i].allFinite() &&
-                        (!has_normals || cloud->normals[i].allFinite()) &&
-                        (!has_cov || cloud->covariances[i].allFinite());
-    if (!finite) continue;
-    cloud->points[kept] = cloud->points[i];
-    if (has_normals) cloud->normals[kept] = cloud->normals[i];
-    if (has_cov) cloud->covariances[kept] = cloud->covariances[i];
-    ++kept;
-  }
-  const std::size_t dropped = cloud->size() - kept;
-  cloud->points.resize(kept);
-  if (has_normals) cloud->normals.resize(kept);
-  if (has_cov) cloud->covariances.resize(kept);
-  cloud->chain_ids.clear();  // frames are surfaces
-  return dropped;
-}
-
 // The stereo error model for points that come without covariances, when the sequence has a
 // camera (DESIGN §4: it "feeds the stereo error model of the points"). Sensor frame.
 void AddStereoCovariances(registration::PointCloud* cloud, const io::CameraModel& c,
@@ -56,6 +33,28 @@ std::string AboutFile(const io::Frame& frame, const std::string& reason) {
 }
 
 }  // namespace
+
+std::size_t DropNonFinite(registration::PointCloud* cloud) {
+  const bool has_normals = cloud->HasNormals();
+  const bool has_cov = cloud->HasCovariances();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const bool finite = cloud->points[i].allFinite() &&
+                        (!has_normals || cloud->normals[i].allFinite()) &&
+                        (!has_cov || cloud->covariances[i].allFinite());
+    if (!finite) continue;
+    cloud->points[kept] = cloud->points[i];
+    if (has_normals) cloud->normals[kept] = cloud->normals[i];
+    if (has_cov) cloud->covariances[kept] = cloud->covariances[i];
+    ++kept;
+  }
+  const std::size_t dropped = cloud->size() - kept;
+  cloud->points.resize(kept);
+  if (has_normals) cloud->normals.resize(kept);
+  if (has_cov) cloud->covariances.resize(kept);
+  cloud->chain_ids.clear();  // frames are surfaces
+  return dropped;
+}
 
 LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::size_t min_points) {
   LoadedFrame out;

@@ -32,6 +32,10 @@ struct LoadedFrame {
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)
 };
 
+/// Keeps the points (with their normals and covariances) that are all finite, in order; clears
+/// chain_ids (frames are surfaces). Returns how many were dropped.
+std::size_t DropNonFinite(registration::PointCloud* cloud);
+
 /// Turns `frame` into body-frame points: stereo::ComputePoints for a stereo pair; for a cloud,
 /// points, normals and covariances moved from the sensor frame by T_body_sensor (a cloud without
 /// covariances gets the stereo error model's, stereo::PointCovariance, when the sequence has a

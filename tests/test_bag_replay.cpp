@@ -161,10 +161,18 @@ TEST_F(BagReplay, CloudBagsReplayAndImport) {
   EXPECT_EQ(summary["frames"], 5);
   EXPECT_EQ(summary["bad_frames"], 0);
   EXPECT_GE(summary["registered"].get<int>(), 3);
+  EXPECT_GT(summary["dropped_nonfinite"].get<int>(), 0);  // the bag's NaN points, counted
 
   const fs::path seq = dir_ / "seq";
   r = Rovermap("import " + bag.string() + " --out " + seq.string() + " " + keys);
   ASSERT_EQ(r.status, 0) << r.err;
+  // The bag's NaN points (one after every 10th) stay out of the PLYs, counted.
+  std::size_t nan = 0;
+  for (std::size_t k = 0; k < 5; ++k)
+    nan += rovermap::io::ReadPly(kTinyCloud / "frames" / (rovermap::io::FrameStem(k) + ".ply"))
+               .size() /
+           10;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["dropped_nonfinite"], nan);
   const rovermap::io::SequenceReader reader(seq);
   EXPECT_EQ(reader.info().sensor_type, rovermap::io::SensorType::kCloud);
   ASSERT_EQ(reader.frame_count(), 5u);
