@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 #include <map>
 #include <sstream>
 
 #include "config/Keys.hpp"
+#include "io/Rpy.hpp"
 
 namespace rovermap::config {
 namespace {
@@ -310,16 +310,11 @@ std::string DumpYaml(const Config& config) {
 }
 
 io::BagOptions BagOptionsFrom(const BagConfig& bag) {
-  constexpr double kDegToRad = M_PI / 180.0;
   io::BagOptions options = bag;
   const std::vector<double>& t = bag.T_body_sensor_translation;
   const std::vector<double>& rpy = bag.T_body_sensor_rpy_deg;
   options.T_body_sensor.translation() = Eigen::Vector3d(t.at(0), t.at(1), t.at(2));
-  options.T_body_sensor.linear() =
-      (Eigen::AngleAxisd(rpy.at(2) * kDegToRad, Eigen::Vector3d::UnitZ()) *
-       Eigen::AngleAxisd(rpy.at(1) * kDegToRad, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(rpy.at(0) * kDegToRad, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  options.T_body_sensor.linear() = io::RotationFromRpyDeg(rpy.at(0), rpy.at(1), rpy.at(2));
   options.default_origin = {bag.origin_latitude_deg, bag.origin_longitude_deg,
                             bag.origin_altitude_m};
   if (bag.origin_given) options.origin = options.default_origin;

@@ -13,14 +13,13 @@
 #include "config/SequenceYaml.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/Rpy.hpp"
 #include "io/PointCloudIo.hpp"
 
 namespace rovermap::io {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 // What frames/ holds for one index.
 struct FrameFiles {
@@ -138,10 +137,7 @@ SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
       Eigen::Vector3d(yaml.translation[0], yaml.translation[1], yaml.translation[2]);
   if (yaml.rotation_rpy_deg) {
     const auto& rpy = *yaml.rotation_rpy_deg;
-    info.T_body_sensor.linear() = (Eigen::AngleAxisd(rpy[2] * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                                   Eigen::AngleAxisd(rpy[1] * kDegToRad, Eigen::Vector3d::UnitY()) *
-                                   Eigen::AngleAxisd(rpy[0] * kDegToRad, Eigen::Vector3d::UnitX()))
-                                      .toRotationMatrix();
+    info.T_body_sensor.linear() = RotationFromRpyDeg(rpy[0], rpy[1], rpy[2]);
   } else {
     const auto& q = *yaml.quaternion_xyzw;
     info.T_body_sensor.linear() =
