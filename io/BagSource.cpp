@@ -27,6 +27,7 @@
 #include <utility>
 
 #include "io/IoError.hpp"
+#include "io/Rpy.hpp"
 
 namespace rovermap::io {
 namespace {
@@ -75,7 +76,7 @@ Eigen::Isometry3d ToIsometry(double x, double y, double z, const Eigen::Quaterni
   }
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(x, y, z);
-  T.linear() = q.normalized().toRotationMatrix();
+  T.linear() = RotationFromQuaternion(q);
   return T;
 }
 
@@ -310,31 +311,46 @@ CameraModel StereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs:
   return camera;
 }
 
-// One static transform: T_parent_child.
+// One static transform: T_parent_child as tf gives it, a translation and a unit quaternion.
 struct StaticEdge {
   std::string parent;
   std::string child;
-  Eigen::Isometry3d T;
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+};
+
+// A rigid transform kept as a quaternion: chained that way, a chain whose other links do not
+// rotate ends with the sensor link's own quaternion, bit for bit (sequence.yaml's form).
+struct QuaternionTransform {
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+
+  QuaternionTransform operator*(const QuaternionTransform& b) const {
+    return {q * b.q, t + RotationFromQuaternion(q) * b.t};
+  }
+  QuaternionTransform Inverse() const {
+    const Eigen::Quaterniond q_inverse = q.conjugate();
+    return {q_inverse, -(RotationFromQuaternion(q_inverse) * t)};
+  }
 };
 
 // T_from_to over the static transforms, walked either way.
-std::optional<Eigen::Isometry3d> Chain(const std::vector<StaticEdge>& edges,
-                                       const std::string& from, const std::string& to) {
-  std::map<std::string, Eigen::Isometry3d> reached = {{from, Eigen::Isometry3d::Identity()}};
+std::optional<QuaternionTransform> Chain(const std::vector<StaticEdge>& edges,
+                                         const std::string& from, const std::string& to) {
+  std::map<std::string, QuaternionTransform> reached = {{from, QuaternionTransform()}};
   std::vector<std::string> frontier = {from};
   while (!frontier.empty()) {
     const std::string frame = frontier.back();
     frontier.pop_back();
-    const Eigen::Isometry3d T_from_frame = reached.at(frame);
+    const QuaternionTransform T_from_frame = reached.at(frame);
     for (const StaticEdge& e : edges) {
       std::string next;
-      Eigen::Isometry3d T_frame_next;
+      QuaternionTransform T_frame_next{e.q, e.t};
       if (e.parent == frame) {
         next = e.child;
-        T_frame_next = e.T;
       } else if (e.child == frame) {
         next = e.parent;
-        T_frame_next = e.T.inverse();
+        T_frame_next = T_frame_next.Inverse();
       } else {
         continue;
       }
@@ -526,7 +542,9 @@ Contents ReadContents(rosbag::Bag& bag, const std::vector<std::string>& topics, 
         const std::string child = FrameName(t.child_frame_id);
         const Eigen::Isometry3d T = ToIsometry(t.transform, where(t.header.stamp));
         if (topic == kTfStaticTopic) {
-          c.statics.push_back({parent, child, T});
+          const auto& r = t.transform.rotation;
+          c.statics.push_back(
+              {parent, child, T.translation(), Eigen::Quaterniond(r.w, r.x, r.y, r.z)});
         } else if (parent == odom_parent && child == odom_child) {
           c.odom.push_back({t.header.stamp.toSec(), T});
         } else {
@@ -567,9 +585,9 @@ Contents ReadContents(rosbag::Bag& bag, const std::vector<std::string>& topics, 
 
 // T_body_sensor over the static transforms. @throw IoError naming `name` if they do not
 // connect the two frames.
-Eigen::Isometry3d StaticBodySensor(const std::vector<StaticEdge>& statics, const BagOptions& o,
-                                   const std::string& name) {
-  const std::optional<Eigen::Isometry3d> T =
+QuaternionTransform StaticBodySensor(const std::vector<StaticEdge>& statics, const BagOptions& o,
+                                     const std::string& name) {
+  const std::optional<QuaternionTransform> T =
       Chain(statics, FrameName(o.body_frame), FrameName(o.sensor_frame));
   if (T) return *T;
   std::string seen;
@@ -678,8 +696,20 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
   info_.directory = bag_file;
   info_.sensor_type = o.sensor_type;
   info_.camera = camera;
-  info_.T_body_sensor =
-      o.T_body_sensor_from_tf_static ? StaticBodySensor(c.statics, o, name) : o.T_body_sensor;
+  // T_body_sensor's rotation from a quaternion, the form sequence.yaml keeps: an imported
+  // sequence then reads back this very rotation, and replays as the bag does.
+  const QuaternionTransform T_body_sensor =
+      o.T_body_sensor_from_tf_static
+          ? StaticBodySensor(c.statics, o, name)
+          : QuaternionTransform{Eigen::Quaterniond(o.T_body_sensor.linear()),
+                                o.T_body_sensor.translation()};
+  // Links each unit within 1e-3 can chain to a norm sequence.yaml would refuse.
+  const Eigen::Quaterniond q = std::abs(T_body_sensor.q.norm() - 1.0) <= 1e-6
+                                   ? T_body_sensor.q
+                                   : T_body_sensor.q.normalized();
+  info_.body_sensor_quaternion = q;
+  info_.T_body_sensor.linear() = RotationFromQuaternion(q);
+  info_.T_body_sensor.translation() = T_body_sensor.t;
   info_.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
   info_.body = o.body;
   const double span = odometry_.back().timestamp - odometry_.front().timestamp;

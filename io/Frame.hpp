@@ -22,6 +22,11 @@ struct SequenceInfo {
   SensorType sensor_type = SensorType::kStereo;
   std::optional<CameraModel> camera;  ///< always set for stereo
   Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
+  /// The unit quaternion T_body_sensor's rotation was made from (RotationFromQuaternion), when
+  /// it was: WriteSequenceYaml writes it as it is, so that the rotation reads back bit for bit
+  /// (a quaternion recomputed from the matrix can differ in its last bit, and the matcher's
+  /// stopping point with it).
+  std::optional<Eigen::Quaterniond> body_sensor_quaternion;
   GeodeticOrigin origin;  ///< of the world (local ENU) frame
   double frame_rate_hz = 0.0;
   std::string body = "earth";  ///< earth|moon|mars

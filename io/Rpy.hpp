@@ -1,6 +1,6 @@
 #pragma once
-// Roll, pitch, yaw in degrees as sequence.yaml (`rotation_rpy_deg`) and the `bag.` config give
-// them. Header-only: config/ uses it without linking io/.
+// Rotations as sequence.yaml (`rotation_rpy_deg`, `quaternion`), the `bag.` config and a bag's
+// transforms give them. Header-only: config/ uses it without linking io/.
 
 #include <Eigen/Geometry>
 
@@ -13,6 +13,12 @@ inline Eigen::Matrix3d RotationFromRpyDeg(double roll_deg, double pitch_deg, dou
           Eigen::AngleAxisd(pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(roll_deg * kDegToRad, Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
+}
+
+/// The rotation of a (nearly) unit quaternion: the one conversion of sequence.yaml's and a
+/// bag's quaternions, so that the same quaternion always gives the same matrix, to the bit.
+inline Eigen::Matrix3d RotationFromQuaternion(const Eigen::Quaterniond& q) {
+  return q.normalized().toRotationMatrix();
 }
 
 }  // namespace rovermap::io

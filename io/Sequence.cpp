@@ -68,7 +68,9 @@ void ReadFrameData(const fs::path& stem, const SequenceInfo& info, Frame* frame)
 }
 
 void WriteSequenceYaml(const fs::path& dir, const SequenceInfo& info, const std::string& header) {
-  const Eigen::Quaterniond q(info.T_body_sensor.linear());
+  const Eigen::Quaterniond q = info.body_sensor_quaternion
+                                   ? *info.body_sensor_quaternion
+                                   : Eigen::Quaterniond(info.T_body_sensor.linear());
   const Eigen::Vector3d& t = info.T_body_sensor.translation();
   char buffer[1024];
   std::string yaml = "# " + header + "\n";
@@ -140,8 +142,8 @@ SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
     info.T_body_sensor.linear() = RotationFromRpyDeg(rpy[0], rpy[1], rpy[2]);
   } else {
     const auto& q = *yaml.quaternion_xyzw;
-    info.T_body_sensor.linear() =
-        Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+    info.body_sensor_quaternion = Eigen::Quaterniond(q[3], q[0], q[1], q[2]);
+    info.T_body_sensor.linear() = RotationFromQuaternion(*info.body_sensor_quaternion);
   }
   info.origin = {yaml.latitude_deg, yaml.longitude_deg, yaml.altitude_m};
   info.frame_rate_hz = yaml.frame_rate_hz;

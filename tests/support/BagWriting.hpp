@@ -231,8 +231,16 @@ inline std::filesystem::path WriteSequenceBag(const std::filesystem::path& seque
     T_body_mast.translation() = Eigen::Vector3d(0.1, 0.0, 0.5);
     tf2_msgs::TFMessage statics;
     statics.transforms.push_back(TransformMsg("base_link", "mast", T_body_mast, start));
-    statics.transforms.push_back(TransformMsg("/mast", topics.sensor_frame,
-                                              T_body_mast.inverse() * info.T_body_sensor, start));
+    geometry_msgs::TransformStamped mast_sensor = TransformMsg(
+        "/mast", topics.sensor_frame, T_body_mast.inverse() * info.T_body_sensor, start);
+    if (info.body_sensor_quaternion) {  // the mast does not rotate: sequence.yaml's own
+      const Eigen::Quaterniond& q = *info.body_sensor_quaternion;
+      mast_sensor.transform.rotation.x = q.x();
+      mast_sensor.transform.rotation.y = q.y();
+      mast_sensor.transform.rotation.z = q.z();
+      mast_sensor.transform.rotation.w = q.w();
+    }
+    statics.transforms.push_back(mast_sensor);
     bag.write("/tf_static", start_time, statics);
   }
   if (how.navsat) {
