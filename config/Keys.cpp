@@ -294,6 +294,10 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "roll and pitch uncertainty a registered increment adds (floor)");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
+  map.Double("odometry_bias_rate", &P::odometry_bias_rate, "1/frame", Bounds{0, false, 1, false},
+             "how fast dead reckoning's bias estimate follows the registration; 0 = off");
+  map.Double("bias_min_information", &P::bias_min_information, "ratio", Bounds{0, false, 1, true},
+             "directions with at least this information inform the bias estimate");
 
   using V = mapper::ServeOptions;
   SectionKeys<V> serve(keys, "serve", &Config::serve);

@@ -23,8 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '1'};
-constexpr std::uint32_t kRecordMagic = 0x314A4D52;  // "RMJ1"
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '2'};
+constexpr std::uint32_t kRecordMagic = 0x324A4D52;  // "RMJ2"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
 
@@ -170,6 +170,7 @@ void PutResult(Writer* w, const FrameResult& f) {
   w->OptionalPose(f.T_world_body_registered);
   w->Matrix(f.increment_covariance);
   w->Put<double>(f.reference_distance_m);
+  for (int i = 0; i < 6; ++i) w->Put<double>(f.odometry_bias(i));
 }
 
 FrameResult GetResult(Reader* r) {
@@ -211,6 +212,7 @@ FrameResult GetResult(Reader* r) {
   f.T_world_body_registered = r->OptionalPose();
   r->Matrix(&f.increment_covariance);
   f.reference_distance_m = r->Get<double>();
+  for (int i = 0; i < 6; ++i) f.odometry_bias(i) = r->Get<double>();
   return f;
 }
 
@@ -354,6 +356,7 @@ struct CheckpointAccess {
       for (const FrameResult& f : m->results_) steps.push_back(f.step);
       m->chain_ = std::make_unique<PoseChain>(std::move(steps));
     }
+    m->odometry_bias_ = m->results_.empty() ? Vector6d::Zero() : m->results_.back().odometry_bias;
     m->attitude_.RestoreVariance(r->Get<double>());
     const bool has_reference = r->Get<std::uint8_t>() != 0;
     const auto reference = r->Get<std::uint64_t>();
@@ -460,7 +463,15 @@ DaemonState Checkpoint::Restore(Mapper* mapper,
     Reader r(data, snapshot.string());
     if (data.size() < sizeof(kSnapshotMagic) + 4 ||
         std::memcmp(data.data(), kSnapshotMagic, sizeof(kSnapshotMagic)) != 0) {
-      throw CheckpointError(snapshot.string() + ": not a rovermap checkpoint");
+      const bool other_version =
+          data.size() >= sizeof(kSnapshotMagic) &&
+          std::memcmp(data.data(), kSnapshotMagic, sizeof(kSnapshotMagic) - 1) == 0;
+      throw CheckpointError(snapshot.string() +
+                            (other_version ? ": a checkpoint of another rovermap version (format " +
+                                                 std::string(1, data[sizeof(kSnapshotMagic) - 1]) +
+                                                 ", this one reads " +
+                                                 kSnapshotMagic[sizeof(kSnapshotMagic) - 1] + ")"
+                                           : ": not a rovermap checkpoint"));
     }
     std::uint32_t crc = 0;
     std::memcpy(&crc, data.data() + data.size() - 4, 4);

@@ -1,13 +1,12 @@
 #include "mapper/Degeneracy.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
 namespace rovermap::mapper {
 namespace {
-
-using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // δ with T_registered = (Exp(δr), δt) ∘ T_predicted: the parameterisation of the information.
 Vector6d LeftDifference(const Eigen::Isometry3d& T_registered,
@@ -44,7 +43,8 @@ std::string DirectionNames(unsigned mask) {
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 const Eigen::Isometry3d& T_registered, const Matrix6d& information,
                                 double extent_m, double min_information,
-                                const Matrix6d& odometry_covariance) {
+                                const Matrix6d& odometry_covariance, const Vector6d& odometry_bias,
+                                double bias_min_information) {
   BlendedIncrement out;
   // Scaled coordinates δs = S⁻¹δ with S = diag(1/extent ×3, 1 ×3): rotations in metres of arc.
   Vector6d s = Vector6d::Ones();
@@ -63,10 +63,14 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   out.min_ratio = std::max(0.0, lambda(0)) / largest;
 
   Matrix6d projector_scaled = Matrix6d::Zero();  // onto the constrained eigenvectors
+  Matrix6d informed_scaled = Matrix6d::Zero();   // onto those that inform the bias
   Matrix6d covariance_scaled = Matrix6d::Zero();
   unsigned taken = 0;
   for (int i = 5; i >= 0; --i) {
     const Vector6d v = V.col(i);
+    if (lambda(i) > 0.0 && lambda(i) >= bias_min_information * largest) {
+      informed_scaled += v * v.transpose();
+    }
     if (lambda(i) > 0.0 && (min_information <= 0.0 || lambda(i) >= min_information * largest)) {
       projector_scaled += v * v.transpose();
       covariance_scaled += v * v.transpose() / lambda(i);
@@ -83,9 +87,20 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   }
   out.odometry_directions = taken;
 
+  // The registration where it is constrained, dead reckoning plus its bias elsewhere.
   const Vector6d delta_scaled = LeftDifference(T_registered, T_predicted).cwiseQuotient(s);
-  const Vector6d delta = (projector_scaled * delta_scaled).cwiseProduct(s);
+  const Vector6d bias_scaled = odometry_bias.cwiseQuotient(s);
+  Vector6d delta_used = projector_scaled * delta_scaled;
+  if (out.constrained < 6) delta_used += (Matrix6d::Identity() - projector_scaled) * bias_scaled;
+  const Vector6d delta = delta_used.cwiseProduct(s);
   out.T = ApplyLeft(delta, T_predicted);
+  // A correction dead reckoning cannot have needed (beyond 3σ of its error model) says
+  // nothing of its bias: on nearly flat ground a weakly informed direction can slide metres.
+  const Vector6d informed = (informed_scaled * delta_scaled).cwiseProduct(s);
+  const Eigen::LDLT<Matrix6d> odometry(odometry_covariance);
+  if (odometry.info() == Eigen::Success && informed.dot(odometry.solve(informed)) <= 9.0) {
+    out.bias_innovation = (informed_scaled * (delta_scaled - bias_scaled)).cwiseProduct(s);
+  }
 
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
   const Matrix6d unconstrained =
@@ -93,6 +108,13 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   out.covariance = s.asDiagonal() * covariance_scaled * s.asDiagonal() +
                    unconstrained * odometry_covariance * unconstrained.transpose();
   return out;
+}
+
+Vector6d BoundedBias(const Vector6d& bias, const Matrix6d& odometry_covariance) {
+  const Eigen::LDLT<Matrix6d> odometry(odometry_covariance);
+  if (odometry.info() != Eigen::Success || !odometry.isPositive()) return bias;
+  const double mahalanobis = std::sqrt(std::max(0.0, bias.dot(odometry.solve(bias))));
+  return mahalanobis > 1.0 ? Vector6d(bias / mahalanobis) : bias;
 }
 
 }  // namespace rovermap::mapper

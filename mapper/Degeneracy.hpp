@@ -1,7 +1,9 @@
 #pragma once
 // Step 5 of the pipeline: per-direction fallback. On flat or featureless ground the
 // registration constrains only some directions (on a plane: z, roll and pitch); in the others
-// its answer is noise, so those keep the dead-reckoning prediction.
+// its answer is noise, so those keep the dead-reckoning prediction, corrected by dead
+// reckoning's systematic error per frame (a heading-rate bias, a wheel-scale error) as the
+// registration's corrections in the directions they do inform estimate it.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -24,6 +26,8 @@ enum Direction : unsigned {
 /// "x y yaw" for a mask of Direction bits, in the order roll pitch yaw x y z; "" for none.
 std::string DirectionNames(unsigned mask);
 
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
 /// The increment kept after the per-direction test.
 struct BlendedIncrement {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  ///< blended T_target_source
@@ -37,18 +41,33 @@ struct BlendedIncrement {
   /// Covariance of T for a left perturbation [rx ry rz tx ty tz] (rad, m), target frame: the
   /// registration's in the constrained directions, `odometry_covariance` in the others.
   Matrix6d covariance = Matrix6d::Zero();
+  /// What this frame tells of dead reckoning's bias: the registration's correction minus the
+  /// bias given, in the directions with at least `bias_min_information` (zero elsewhere), as a
+  /// left perturbation [rx ry rz (rad) tx ty tz (m)] of the increment, target frame; zero when
+  /// that correction is beyond 3σ of `odometry_covariance`. The caller moves its estimate by a
+  /// fraction of it (mapper.odometry_bias_rate).
+  Vector6d bias_innovation = Vector6d::Zero();
 };
 
 /// Blends `T_registered` and `T_predicted` (both T_target_source) per eigen-direction of the
 /// registration's `information` (left perturbation p' = Exp(δr)·p + δt in the target frame, as
 /// RegistrationResult). Rotations are scaled by `extent_m` (the cloud's radius) so that their
 /// eigenvalues compare with the translations' in metres, as `conditioning` does. Directions
-/// whose eigenvalue is below `min_information` × the largest keep the prediction;
-/// min_information <= 0 keeps the registration whole. A zero information keeps the prediction
-/// whole. Never throws.
+/// whose eigenvalue is below `min_information` × the largest keep the prediction, moved by
+/// `odometry_bias` (dead reckoning's estimated error per increment, same parameterisation) in
+/// those directions; min_information <= 0 keeps the registration whole. A zero information
+/// keeps the prediction whole. Never throws.
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 const Eigen::Isometry3d& T_registered, const Matrix6d& information,
                                 double extent_m, double min_information,
-                                const Matrix6d& odometry_covariance);
+                                const Matrix6d& odometry_covariance,
+                                const Vector6d& odometry_bias = Vector6d::Zero(),
+                                double bias_min_information = 1e-6);
+
+/// `bias` shrunk, if need be, to the 1σ ellipsoid of `odometry_covariance` (same
+/// parameterisation): dead reckoning's error model bounds what a systematic error per increment
+/// can be; the estimate never leaves it. A covariance that is not positive definite leaves the
+/// bias as it is. Never throws.
+Vector6d BoundedBias(const Vector6d& bias, const Matrix6d& odometry_covariance);
 
 }  // namespace rovermap::mapper

@@ -53,6 +53,17 @@ nlohmann::json CorrectionJson(const Eigen::Isometry3d& T) {
           {"dyaw_deg", c.dyaw_deg}};
 }
 
+// Dead reckoning's estimated bias per frame after the last frame (BlendIncrement).
+nlohmann::json OdometryBiasJson(const std::vector<FrameResult>& results) {
+  const Vector6d b = results.empty() ? Vector6d::Zero() : results.back().odometry_bias;
+  return {{"droll_deg", b(0) * kRadToDeg},
+          {"dpitch_deg", b(1) * kRadToDeg},
+          {"dyaw_deg", b(2) * kRadToDeg},
+          {"dx_m", b(3)},
+          {"dy_m", b(4)},
+          {"dz_m", b(5)}};
+}
+
 // Total and median over the frames of one stage.
 nlohmann::json StageJson(const std::vector<FrameResult>& results,
                          const std::function<double(const StageTimes&)>& stage) {
@@ -134,6 +145,7 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
       {"dropped_nonfinite", nonfinite},
       {"distance_m", state.distance_m},
       {"final_correction", CorrectionJson(state.final_correction)},
+      {"odometry_bias", OdometryBiasJson(results)},
       {"timing", timing},
       {"frames_per_second",
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},

@@ -68,6 +68,7 @@ struct Mapper::Registered {
   unsigned odometry_directions = 0;
   std::optional<registration::RegistrationResult> matcher;
   double reference_distance_m = 0.0;  ///< the matcher's D (0: keep the last one)
+  Vector6d odometry_bias = Vector6d::Zero();  ///< the bias estimate if this frame is chained
 };
 
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
@@ -143,14 +144,17 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
                                   : RegisterOntoReference(*source, frame.T_world_body_odom);
   r.time.register_ms = MsSince(register_start);
 
-  // 6. Chain the accepted increment (or dead reckoning's).
+  // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
+  // estimate of dead reckoning's bias.
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
+  if (reg.T_world_body && !r.step.fallback) odometry_bias_ = reg.odometry_bias;
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
 
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
+  r.odometry_bias = odometry_bias_;
   KeepAsReference(std::move(source), r.step, r.reference_distance_m);
   r.time.total_ms = loaded.stereo_ms + prepared.prepare_ms + MsSince(start);
   results_.push_back(r);
@@ -212,6 +216,7 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   meta.T_world_body_odom = T_world_body_odom;
   r.step = Chain(meta, std::nullopt, Matrix6d::Zero());
   r.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
+  r.odometry_bias = odometry_bias_;
   results_.push_back(r);
   return r;
 }
@@ -251,12 +256,14 @@ Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
   out.covariance_in_previous = recorded.increment_covariance;
   out.odometry_directions = recorded.odometry_directions;
   out.reference_distance_m = recorded.reference_distance_m;
+  out.odometry_bias = recorded.odometry_bias;
   return out;
 }
 
 Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedCloud& source,
                                                  const Eigen::Isometry3d& T_world_body_odom) {
   Registered out;
+  out.odometry_bias = odometry_bias_;
   if (!chain_) return out;  // frame 0: the chain starts at its dead-reckoning pose
   if (!reference_index_) {
     out.reason = FallbackReason::kNoReference;
@@ -299,7 +306,8 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // correction that is left against what odometry can be wrong by.
   const BlendedIncrement blended =
       BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
-                     options_.mapper.min_information, odometry_covariance);
+                     options_.mapper.min_information, odometry_covariance, odometry_bias_,
+                     options_.mapper.bias_min_information);
   if (blended.constrained == 0) {
     out.reason = FallbackReason::kRegistrationFailed;
     out.detail = "no direction constrained (information ratio below mapper.min_information)";
@@ -315,6 +323,9 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   out.reason = FallbackReason::kNone;
   out.odometry_directions = blended.odometry_directions;
   out.T_world_body = T_world_ref * blended.T;
+  out.odometry_bias =
+      BoundedBias(odometry_bias_ + options_.mapper.odometry_bias_rate * blended.bias_innovation,
+                  odometry_covariance);
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
   out.covariance_in_previous = A * blended.covariance * A.transpose();

@@ -17,6 +17,7 @@
 #include "io/Georeference.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/AttitudePrior.hpp"
+#include "mapper/Degeneracy.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/FrameLoader.hpp"
 #include "mapper/LocalMap.hpp"
@@ -89,6 +90,9 @@ struct FrameResult {
   std::optional<Eigen::Isometry3d> T_world_body_registered;
   Matrix6d increment_covariance = Matrix6d::Zero();
   double reference_distance_m = 0.0;
+  /// Dead reckoning's estimated bias per increment after this frame (BlendedIncrement): a left
+  /// perturbation [rx ry rz (rad) tx ty tz (m)] in the previous body frame.
+  Vector6d odometry_bias = Vector6d::Zero();
 };
 
 /// Step 1's outcome: a frame's points loaded, indexed (tree built) and their isolated points
@@ -198,6 +202,7 @@ class Mapper {
   std::unique_ptr<registration::IndexedCloud> previous_;
   LocalMap local_map_;
   double last_reference_distance_m_ = 0.0;
+  Vector6d odometry_bias_ = Vector6d::Zero();  ///< dead reckoning's, see BlendIncrement
   std::vector<FrameResult> results_;
 };
 

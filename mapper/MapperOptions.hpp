@@ -59,6 +59,14 @@ struct MapperOptions {
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
   /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.
   double min_information = 1e-4;
+  /// Dead reckoning's bias: in the directions kept from dead reckoning, the prediction is moved
+  /// by an estimate of its systematic error per frame (a heading-rate bias, a wheel-scale
+  /// error), the running mean of the registration's corrections in the directions they inform:
+  /// each accepted frame moves the estimate this fraction of the way [1/frame]. 0 = off.
+  double odometry_bias_rate = 0.02;
+  /// Directions whose information ratio (as min_information) is at least this inform the bias
+  /// estimate [ratio]: below, on a plane's x, y and yaw, the registration's answer is noise.
+  double bias_min_information = 1e-6;
 };
 
 }  // namespace rovermap::mapper

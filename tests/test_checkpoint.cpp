@@ -167,6 +167,20 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
   } catch (const mapper::CheckpointError& e) {
     EXPECT_NE(std::string(e.what()).find("state.bin"), std::string::npos) << e.what();
   }
+  // A snapshot of an earlier format (the frame results grew dead reckoning's bias) is named
+  // as such, not as damage.
+  f.open(snapshot, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(7);
+  f.put('1');
+  f.close();
+  try {
+    cp.Restore(m.get(), [&](std::size_t k) { return Read(k); });
+    FAIL() << "a snapshot of format 1 was accepted";
+  } catch (const mapper::CheckpointError& e) {
+    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 1, this one reads 2)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // The snapshot cadence: checkpoint_every frames at least; then it waits for its share of the

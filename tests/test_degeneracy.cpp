@@ -2,6 +2,7 @@
 // constrains and the prediction in the others, with the covariance to match.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <random>
 
 #include "mapper/Degeneracy.hpp"
@@ -19,6 +20,11 @@ Eigen::Isometry3d Pose(const Eigen::Vector3d& rotation_vector, const Eigen::Vect
         Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix();
   T.translation() = t;
   return T;
+}
+
+Eigen::Vector3d RotationVector(const Eigen::Isometry3d& T) {
+  const Eigen::AngleAxisd aa(T.linear());
+  return aa.angle() * aa.axis();
 }
 
 // Information of point-to-plane pairs on the plane z = 0 (normals +z), points spread over
@@ -63,11 +69,9 @@ TEST(Degeneracy, PlaneKeepsPredictionInXYYawAndRegistrationInZRollPitch) {
   // x, y and yaw as predicted (to first order in the small rotations), z, roll, pitch as
   // registered.
   const Eigen::Isometry3d D = b.T * predicted.inverse();
-  const Eigen::AngleAxisd aa(D.linear());
-  const Eigen::Vector3d dr = aa.angle() * aa.axis();
+  const Eigen::Vector3d dr = RotationVector(D);
   const Eigen::Isometry3d R = registered * predicted.inverse();
-  const Eigen::AngleAxisd ra(R.linear());
-  const Eigen::Vector3d rr = ra.angle() * ra.axis();
+  const Eigen::Vector3d rr = RotationVector(R);
   EXPECT_NEAR(dr.z(), 0.0, 1e-9);
   EXPECT_NEAR(D.translation().x(), 0.0, 1e-9);
   EXPECT_NEAR(D.translation().y(), 0.0, 1e-9);
@@ -107,4 +111,66 @@ TEST(Degeneracy, ZeroInformationKeepsThePredictionWhole) {
   EXPECT_EQ(none.constrained, 0);
   EXPECT_LT((none.T.matrix() - predicted.matrix()).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_EQ(none.covariance, Diagonal(0.01, 0.02));
+}
+
+// Dead reckoning's bias: the directions kept from dead reckoning move by the bias estimate;
+// the directions that inform it (here yaw, weak but above bias_min_information) say how far
+// the registration's correction is from that estimate; uninformed ones (x, y) say nothing.
+TEST(Degeneracy, UnconstrainedDirectionsTakeTheBiasAndInformedOnesUpdateIt) {
+  const double extent = 5.0;
+  Matrix6d info = PlaneInformation(extent);
+  // A weak yaw constraint: 1e-5 of the largest scaled eigenvalue, as on gently rolling ground.
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> plane(info);
+  const double largest_scaled = plane.eigenvalues()(5) / (extent * extent);
+  info(2, 2) += 1e-5 * largest_scaled * extent * extent;
+  const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0.0, 0.0});
+  const Eigen::Isometry3d registered = Pose({0.01, -0.008, 0.05}, {0.6, 0.05, 0.03});
+  Vector6d bias;
+  bias << 0.0, 0.0, 0.004, 0.01, -0.005, 0.0;
+  const Matrix6d odometry = Diagonal(0.05, 0.2);
+  const BlendedIncrement b =
+      BlendIncrement(predicted, registered, info, extent, 1e-4, odometry, bias, 1e-6);
+  EXPECT_EQ(b.odometry_directions, kYaw | kX | kY) << DirectionNames(b.odometry_directions);
+
+  // x, y, yaw: the prediction moved by the bias (to first order); z, roll, pitch registered.
+  const Eigen::Isometry3d D = b.T * predicted.inverse();
+  const Eigen::Vector3d dr = RotationVector(D);
+  const Eigen::Isometry3d R = registered * predicted.inverse();
+  const Eigen::Vector3d rr = RotationVector(R);
+  EXPECT_NEAR(dr.z(), 0.004, 1e-4);
+  EXPECT_NEAR(D.translation().x(), 0.01, 1e-4);
+  EXPECT_NEAR(D.translation().y(), -0.005, 1e-4);
+  EXPECT_NEAR(dr.x(), rr.x(), 1e-4);
+  EXPECT_NEAR(D.translation().z(), R.translation().z(), 1e-4);
+
+  // The innovation: yaw's correction minus the bias; nothing in x and y (no information).
+  EXPECT_NEAR(b.bias_innovation(2), rr.z() - 0.004, 1e-4);
+  EXPECT_NEAR(b.bias_innovation(3), 0.0, 1e-12);
+  EXPECT_NEAR(b.bias_innovation(4), 0.0, 1e-12);
+  EXPECT_NEAR(b.bias_innovation(5), R.translation().z(), 1e-4);
+
+  // With the floor above yaw's information, yaw no longer informs the bias.
+  const BlendedIncrement above =
+      BlendIncrement(predicted, registered, info, extent, 1e-4, odometry, bias, 1e-4);
+  EXPECT_NEAR(above.bias_innovation(2), 0.0, 1e-12);
+  // A correction beyond 3σ of dead reckoning's error model informs nothing.
+  const BlendedIncrement implausible =
+      BlendIncrement(predicted, registered, info, extent, 1e-4, Diagonal(0.001, 0.001), bias, 1e-6);
+  EXPECT_EQ(implausible.bias_innovation, Vector6d::Zero());
+  // Without a bias the unconstrained directions are the prediction's, as before.
+  const BlendedIncrement none = BlendIncrement(predicted, registered, info, extent, 1e-4, odometry);
+  EXPECT_NEAR((none.T * predicted.inverse()).translation().x(), 0.0, 1e-9);
+}
+
+TEST(Degeneracy, TheBiasStaysWithinDeadReckoningsErrorModel) {
+  const Matrix6d odometry = Diagonal(0.01, 0.02);
+  Vector6d small;
+  small << 0.001, 0, 0.002, 0.005, 0, 0;
+  EXPECT_EQ(BoundedBias(small, odometry), small);
+  Vector6d large;
+  large << 0, 0, 0.03, 0.04, 0, 0;  // 5σ: shrunk onto the 1σ ellipsoid, same direction
+  const Vector6d bounded = BoundedBias(large, odometry);
+  EXPECT_NEAR(bounded.dot(odometry.inverse() * bounded), 1.0, 1e-12);
+  EXPECT_NEAR(bounded(2) / bounded(3), 0.75, 1e-12);
+  EXPECT_EQ(BoundedBias(large, Matrix6d::Zero()), large);  // no model: left alone
 }
