@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "config/Config.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/IoError.hpp"
 #include "mosaic/Mosaic.hpp"
@@ -214,7 +215,7 @@ TEST_F(MosaicTest, OtherOriginsAndRotationsLandOnTheCommonGrid) {
   // B: another origin, its grid rotated by 20 degrees, cells of 0.8 m.
   const double angle = 20.0 * M_PI / 180.0;
   const double s = 0.8;
-  const std::array<double, 6> gb = {500030.0, s * std::cos(angle), s * std::sin(angle),
+  const std::array<double, 6> gb = {500030.0,  s * std::cos(angle), s * std::sin(angle),
                                     4000030.0, s * std::sin(angle), -s * std::cos(angle)};
   WriteDem(dir_ / "b.tif", 30, 30, gb, crs, Plane(0.05f));
   // Bilinear resampling reproduces a plane except in the outermost cell of an input, where it
@@ -291,6 +292,17 @@ TEST_F(MosaicTest, AnotherUtmZoneIsReprojected) {
       Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif", NoCoregistration());
   const io::DemRaster m = Read("m.tif");
   EXPECT_EQ(m.epsg, 32633);
+  // Within an input's footprint but less than a cell from its edge.
+  auto near_edge = [&](double x, double y) {
+    auto edge = [](double u, double v) {
+      const bool inside = u >= 0 && v >= 0 && u <= 40 && v <= 40;
+      return inside && (u < 1 || v < 1 || u > 39 || v > 39);
+    };
+    double u = x;
+    double v = y;
+    to32->Transform(1, &u, &v);
+    return edge(x - ax, ay - y) || edge(u - bx, by - v);
+  };
   std::size_t both = 0;
   std::size_t b_only = 0;
   double worst = 0.0;
@@ -300,6 +312,8 @@ TEST_F(MosaicTest, AnotherUtmZoneIsReprojected) {
       if (std::isnan(m.elevation_m[c])) continue;
       const double x = m.geotransform[0] + (col + 0.5) * m.geotransform[1];
       const double y = m.geotransform[3] + (row + 0.5) * m.geotransform[5];
+      // Bilinear resampling reproduces the plane but in an input's outermost cells.
+      if (near_edge(x, y)) continue;
       worst = std::max(worst, std::abs(double(m.elevation_m[c]) - plane_33(x, y).z));
       both += m.count[c] == 2.0f;
       b_only += x > ax + 41.0;
@@ -334,7 +348,12 @@ TEST_F(MosaicTest, TilesGiveTheSameAsOneTile) {
     EXPECT_NEAR(one.stddev_m[c], tiled.stddev_m[c], 1e-8) << c;
     EXPECT_EQ(one.count[c], tiled.count[c]) << c;
   }
-  EXPECT_EQ(Disagreement("one.tif"), Disagreement("tiled.tif"));
+  const std::vector<float> d_one = Disagreement("one.tif");
+  const std::vector<float> d_tiled = Disagreement("tiled.tif");
+  for (std::size_t c = 0; c < d_one.size(); ++c) {
+    if (std::isnan(d_one[c]) && std::isnan(d_tiled[c])) continue;
+    EXPECT_EQ(d_one[c], d_tiled[c]) << c;
+  }
 }
 
 TEST_F(MosaicTest, DisagreementCountsAPlantedOffset) {
@@ -401,22 +420,21 @@ TEST_F(MosaicTest, CoregistrationCorrectsAKnownShift) {
   const mosaic::InputReport& b = result.inputs[1];
   EXPECT_TRUE(b.applied) << b.status;
   EXPECT_EQ(b.overlap_cells, 72u * 120u);
-  EXPECT_NEAR(b.translation_m.x(), -0.2, 0.01);
-  EXPECT_NEAR(b.translation_m.y(), 0.0, 0.01);
-  EXPECT_NEAR(b.translation_m.z(), -0.1, 0.005);
-  EXPECT_LT(b.rotation_deg.norm(), 0.05);
-  EXPECT_LT(b.rms_after_m, 0.5 * b.rms_before_m);
-  EXPECT_LT(b.disagreement_after, b.disagreement_before / 4);
+  // Measured: (-0.2031, -0.0039, -0.1005) m and 0.015 degrees (noise-free DEMs: 0.3 mm).
+  EXPECT_NEAR(b.translation_m.x(), -0.2, 0.008);
+  EXPECT_NEAR(b.translation_m.y(), 0.0, 0.008);
+  EXPECT_NEAR(b.translation_m.z(), -0.1, 0.002);
+  EXPECT_LT(b.rotation_deg.norm(), 0.03);
+  // Measured: RMS 0.102 -> 0.026 m (the noise of two DEMs: 0.028), 5414 -> 8 cells beyond 3σ.
+  EXPECT_LT(b.rms_after_m, 0.03);
+  EXPECT_LT(b.disagreement_after * 50, b.disagreement_before);
   const double plain = rmse("plain.tif");
   const double coregistered = rmse("coreg.tif");
   RecordProperty("translation_x", std::to_string(b.translation_m.x()));
   RecordProperty("rmse_plain", std::to_string(plain));
   RecordProperty("rmse_coregistered", std::to_string(coregistered));
-  std::cerr << "shift found " << b.translation_m.transpose() << " rot "
-            << b.rotation_deg.transpose() << " rms " << b.rms_before_m << " -> " << b.rms_after_m
-            << "; disagreement " << b.disagreement_before << " -> " << b.disagreement_after
-            << "; RMSE " << plain << " -> " << coregistered << "\n";
-  EXPECT_LT(coregistered, 0.6 * plain);
+  // Measured: 0.064 -> 0.016 m.
+  EXPECT_LT(coregistered, 0.35 * plain);
   const nlohmann::json report = nlohmann::json::parse(Slurp(dir_ / "mosaic.json"));
   EXPECT_EQ(report["inputs"][1]["status"], "registered");
   EXPECT_EQ(report["inputs"][0]["status"], "reference");
@@ -502,6 +520,24 @@ TEST_F(MosaicErrorTest, BadKeysAreConfigErrors) {
     EXPECT_NE(r.err.find(key), std::string::npos) << r.err;
     ExpectNoOutput({"a.tif"});
   }
+}
+
+}  // namespace
+}  // namespace rovermap
+
+namespace rovermap {
+namespace {
+
+TEST(MosaicConfig, CrsTextRoundTripsThroughTheDump) {
+  const config::Config cfg = config::ParseConfig(
+      "mosaic:\n  crs: \"EPSG:32633\"\n  cell_size_m: 0.5\n  coregister: false\n", "test.yaml",
+      {"mosaic.tile_cells=64"});
+  EXPECT_EQ(cfg.mosaic.crs, "EPSG:32633");
+  EXPECT_EQ(cfg.mosaic.tile_cells, 64);
+  config::Config odd;
+  odd.mosaic.crs = "+proj=tmerc +lat_0=0 \"quoted\" \\ back\nslash";
+  const config::Config back = config::ParseConfig(config::DumpYaml(odd), "dump.yaml", {});
+  EXPECT_EQ(back.mosaic.crs, odd.mosaic.crs);
 }
 
 }  // namespace
