@@ -4,8 +4,11 @@
 #include <cpl_error.h>
 #include <cpl_string.h>
 #include <gdal_priv.h>
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -118,6 +121,11 @@ class TemporaryFile {
       throw io::IoError(out.string() + ": cannot create a temporary file beside it (" +
                         std::generic_category().message(errno) + ")");
     }
+    // mkstemp makes the file 0600: the mosaic gets the mode any new file would (0666 less the
+    // umask), as the other outputs.
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    ::fchmod(fd, 0666 & ~mask);
     ::close(fd);
     path_ = pattern;
   }
@@ -215,6 +223,14 @@ void TranslateToCog(const fs::path& staging, const fs::path& cog, const fs::path
   if (copy != nullptr) GDALClose(GDALDataset::ToHandle(copy));
   ok = ok && CPLGetLastErrorType() < CE_Failure;
   if (!ok) FailWrite(out, "GDAL cannot write the COG");
+  // On disk before the rename, as io::WriteFileAtomically does.
+  const int fd = ::open(cog.c_str(), O_RDONLY | O_CLOEXEC);
+  const bool synced = fd >= 0 && ::fsync(fd) == 0;
+  if (fd >= 0) ::close(fd);
+  if (!synced) {
+    throw io::IoError(out.string() + ": cannot flush the COG to disk (" +
+                      std::generic_category().message(errno) + ")");
+  }
 }
 
 }  // namespace
