@@ -14,7 +14,9 @@
 #include <random>
 
 #include "config/Config.hpp"
+#include "dem/ElevationMap.hpp"
 #include "io/GeoTiff.hpp"
+#include "io/Georeference.hpp"
 #include "io/IoError.hpp"
 #include "mosaic/Mosaic.hpp"
 #include "tests/support/CommandFixture.hpp"
@@ -538,6 +540,81 @@ TEST(MosaicConfig, CrsTextRoundTripsThroughTheDump) {
   odd.mosaic.crs = "+proj=tmerc +lat_0=0 \"quoted\" \\ back\nslash";
   const config::Config back = config::ParseConfig(config::DumpYaml(odd), "dump.yaml", {});
   EXPECT_EQ(back.mosaic.crs, odd.mosaic.crs);
+}
+
+}  // namespace
+}  // namespace rovermap
+
+namespace rovermap {
+namespace {
+
+// Two replay-style dem.tif files (io::WriteDemGeoTiff from an ElevationMap on each origin's
+// grid, rotated by its meridian convergence): origins on either side of the zone 32/33 edge at
+// 12° E, 3 m apart in altitude. The true terrain is a plane in zone 33.
+class MosaicOfReplayDems : public MosaicTest {
+ protected:
+  static constexpr double kLat = 45.0;
+  // Ellipsoidal height of the truth at zone-33 (E, N).
+  static double Truth(double e, double n) { return 100.0 + 0.05 * (e - kE0) + 0.02 * (n - kN0); }
+  static constexpr double kE0 = 264000.0;
+  static constexpr double kN0 = 4986000.0;
+
+  void WriteTraverse(const fs::path& path, double lon_deg, double altitude_m) {
+    const io::Georeference georef(io::GeodeticOrigin{kLat, lon_deg, altitude_m});
+    OGRSpatialReference from;
+    OGRSpatialReference to;
+    from.importFromEPSG(georef.epsg());
+    to.importFromEPSG(32633);
+    from.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+    to.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+    std::unique_ptr<OGRCoordinateTransformation> ct(OGRCreateCoordinateTransformation(&from, &to));
+    dem::ElevationMapOptions options;
+    options.cell_size_m = 0.5;
+    options.grid_rotation_rad = georef.convergence_rad();
+    dem::ElevationMap map(options);
+    for (double y = -20.0; y <= 20.0; y += 0.25) {
+      for (double x = -20.0; x <= 20.0; x += 0.25) {
+        const std::optional<dem::CellIndex> cell = map.WorldToCell(x, y);
+        ASSERT_TRUE(cell);
+        const Eigen::Vector2d centre = map.CellCenterWorld(*cell);
+        Eigen::Vector2d p = georef.EnuToProjectedExact(centre.x(), centre.y());
+        ASSERT_TRUE(ct->Transform(1, &p.x(), &p.y()));
+        map.SetCell(*cell, Truth(p.x(), p.y()) - altitude_m, 0.01 * 0.01);
+      }
+    }
+    io::WriteDemGeoTiff(path, map, georef);
+  }
+};
+
+TEST_F(MosaicOfReplayDems, OriginsInTwoZonesAndAltitudesAgree) {
+  WriteTraverse(dir_ / "a.tif", 11.9999, 100.0);  // zone 32
+  WriteTraverse(dir_ / "b.tif", 12.0002, 103.0);  // zone 33, 16 m east, 3 m higher origin
+  auto options = NoCoregistration();
+  options.crs = "EPSG:32633";
+  Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif", options);
+  const io::DemRaster m = Read("m.tif");
+  const std::vector<float> d = Disagreement("m.tif");
+  EXPECT_EQ(m.epsg, 32633);
+  std::size_t both = 0;
+  double worst = 0.0;
+  for (int row = 0; row < m.height; ++row) {
+    for (int col = 0; col < m.width; ++col) {
+      const std::size_t c = static_cast<std::size_t>(row) * m.width + col;
+      if (std::isnan(m.elevation_m[c])) continue;
+      const double e = m.geotransform[0] + (col + 0.5) * m.geotransform[1];
+      const double n = m.geotransform[3] + (row + 0.5) * m.geotransform[5];
+      // Heights above the first input's origin altitude (100 m).
+      worst = std::max(worst, std::abs(m.elevation_m[c] - (Truth(e, n) - 100.0)));
+      if (m.count[c] > 3.5f) {
+        ++both;
+        EXPECT_EQ(d[c], 0.0f) << col << " " << row;
+      }
+    }
+  }
+  // Half a cell's worth of slope (0.054 per metre) at the outermost cells, where bilinear
+  // resampling has one neighbour fewer; without the altitude shift B would be 3 m off.
+  EXPECT_LT(worst, 0.02);  // measured 0.013 m
+  EXPECT_GT(both, 1000u);
 }
 
 }  // namespace
