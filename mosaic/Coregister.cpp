@@ -111,45 +111,36 @@ double MedianDifference(const WarpedLayers& source, const FusedLayers& target) {
   return dz[dz.size() / 2];
 }
 
-// The cells whose neighbours within `margin` cells all hold target data: source points there
-// have their true partners in the target. A source point beyond the target's edge pairs with
-// edge points instead and pulls the estimate (measured: 2 cm of a 20 cm shift).
+// Keeps (1) the entries of one line (n values `stride` apart from `first`) with more than
+// `margin` entries of 1 on both sides, itself included; the others become 0.
+void ErodeLine(std::vector<unsigned char>* mask, std::size_t first, std::size_t stride, int n,
+               int margin) {
+  std::vector<int> before(static_cast<std::size_t>(n), 0);
+  int run = 0;
+  for (int k = 0; k < n; ++k) {
+    run = (*mask)[first + k * stride] != 0 ? run + 1 : 0;
+    before[k] = run;
+  }
+  run = 0;
+  for (int k = n - 1; k >= 0; --k) {
+    unsigned char& v = (*mask)[first + k * stride];
+    run = v != 0 ? run + 1 : 0;
+    v = std::min(before[k], run) > margin ? 1 : 0;
+  }
+}
+
+// The cells whose neighbours within `margin` cells (a square) all hold target data: source
+// points there have their true partners in the target. A source point beyond the target's edge
+// pairs with edge points instead and pulls the estimate.
 std::vector<unsigned char> InsideTarget(const FusedLayers& target, const Window& window,
                                         int margin) {
-  const int w = window.width;
-  const int h = window.height;
-  // Distance to the nearest empty cell along rows, then columns (a square neighbourhood).
   std::vector<unsigned char> inside(window.cells(), 0);
-  std::vector<int> run(window.cells(), 0);
-  for (int row = 0; row < h; ++row) {
-    int since_empty = 0;
-    for (int col = 0; col < w; ++col) {
-      const std::size_t c = static_cast<std::size_t>(row) * w + col;
-      since_empty = Usable(target.elevation_m[c], target.stddev_m[c]) ? since_empty + 1 : 0;
-      run[c] = since_empty;
-    }
-    int until_empty = 0;
-    for (int col = w - 1; col >= 0; --col) {
-      const std::size_t c = static_cast<std::size_t>(row) * w + col;
-      until_empty = run[c] > 0 ? until_empty + 1 : 0;
-      // Inside along the row: margin cells of data on both sides.
-      run[c] = std::min(run[c], until_empty) > margin ? 1 : 0;
-    }
-  }
-  for (int col = 0; col < w; ++col) {
-    int since = 0;
-    std::vector<int> down(h, 0);
-    for (int row = 0; row < h; ++row) {
-      since = run[static_cast<std::size_t>(row) * w + col] ? since + 1 : 0;
-      down[row] = since;
-    }
-    int until = 0;
-    for (int row = h - 1; row >= 0; --row) {
-      const std::size_t c = static_cast<std::size_t>(row) * w + col;
-      until = down[row] > 0 ? until + 1 : 0;
-      inside[c] = std::min(down[row], until) > margin ? 1 : 0;
-    }
-  }
+  for (std::size_t c = 0; c < inside.size(); ++c)
+    inside[c] = Usable(target.elevation_m[c], target.stddev_m[c]) ? 1 : 0;
+  const auto w = static_cast<std::size_t>(window.width);
+  for (int row = 0; row < window.height; ++row)
+    ErodeLine(&inside, row * w, 1, window.width, margin);
+  for (int col = 0; col < window.width; ++col) ErodeLine(&inside, col, w, window.height, margin);
   return inside;
 }
 

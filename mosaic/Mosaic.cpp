@@ -3,18 +3,20 @@
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
-#include <gdal_priv.h>
 #include <fcntl.h>
+#include <gdal_priv.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
@@ -157,20 +159,26 @@ class TemporaryFile {
 
 const char* const kBandNames[4] = {"elevation", "elevation_stddev", "count", "disagreement"};
 
+// A GDAL option list (free with CSLDestroy).
+char** CreationOptions(std::initializer_list<std::pair<const char*, const char*>> options) {
+  char** list = nullptr;
+  for (const auto& [name, value] : options) list = CSLSetNameValue(list, name, value);
+  return list;
+}
+
 // The tiled intermediate GeoTIFF the tiles are written into.
 DatasetPtr CreateStaging(const fs::path& staging, const fs::path& out, const OutputGrid& grid,
                          const std::string& datum, std::size_t inputs) {
   GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (gtiff == nullptr) FailWrite(out, "GDAL lacks the GTiff driver");
-  char** create = nullptr;
-  create = CSLSetNameValue(create, "TILED", "YES");
-  create = CSLSetNameValue(create, "BLOCKXSIZE", "256");
-  create = CSLSetNameValue(create, "BLOCKYSIZE", "256");
-  create = CSLSetNameValue(create, "COMPRESS", "DEFLATE");
-  create = CSLSetNameValue(create, "PREDICTOR", "3");
-  create = CSLSetNameValue(create, "ZLEVEL", "1");
-  create = CSLSetNameValue(create, "BIGTIFF", "IF_SAFER");
-  create = CSLSetNameValue(create, "SPARSE_OK", "TRUE");
+  char** create = CreationOptions({{"TILED", "YES"},
+                                   {"BLOCKXSIZE", "256"},
+                                   {"BLOCKYSIZE", "256"},
+                                   {"COMPRESS", "DEFLATE"},
+                                   {"PREDICTOR", "3"},
+                                   {"ZLEVEL", "1"},
+                                   {"BIGTIFF", "IF_SAFER"},
+                                   {"SPARSE_OK", "TRUE"}});
   DatasetPtr ds(gtiff->Create(staging.c_str(), grid.width, grid.height, 4, GDT_Float32, create));
   CSLDestroy(create);
   if (!ds) FailWrite(out, "cannot create the staging GeoTIFF");
@@ -206,15 +214,14 @@ void TranslateToCog(const fs::path& staging, const fs::path& cog, const fs::path
   if (driver == nullptr) FailWrite(out, "GDAL lacks the COG driver");
   DatasetPtr source(GDALDataset::Open(staging.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
   if (!source) FailWrite(out, "cannot reopen the staging GeoTIFF");
-  char** create = nullptr;
-  create = CSLSetNameValue(create, "COMPRESS", "DEFLATE");
-  create = CSLSetNameValue(create, "PREDICTOR", "FLOATING_POINT");
-  create = CSLSetNameValue(create, "LEVEL", "1");
-  create = CSLSetNameValue(create, "BLOCKSIZE", "512");
-  create = CSLSetNameValue(create, "OVERVIEWS", "AUTO");
-  create = CSLSetNameValue(create, "RESAMPLING", "AVERAGE");
-  create = CSLSetNameValue(create, "BIGTIFF", "IF_SAFER");
-  create = CSLSetNameValue(create, "NUM_THREADS", "2");
+  char** create = CreationOptions({{"COMPRESS", "DEFLATE"},
+                                   {"PREDICTOR", "FLOATING_POINT"},
+                                   {"LEVEL", "1"},
+                                   {"BLOCKSIZE", "512"},
+                                   {"OVERVIEWS", "AUTO"},
+                                   {"RESAMPLING", "AVERAGE"},
+                                   {"BIGTIFF", "IF_SAFER"},
+                                   {"NUM_THREADS", "2"}});
   CPLErrorReset();
   GDALDataset* copy =
       driver->CreateCopy(cog.c_str(), source.get(), FALSE, create, nullptr, nullptr);

@@ -99,6 +99,19 @@ mosaic::MosaicOptions NoCoregistration() {
   return options;
 }
 
+// Calls f(c, x, y) for each cell of `m` with an elevation: its index and its centre.
+template <typename F>
+void ForEachCell(const io::DemRaster& m, F f) {
+  for (int row = 0; row < m.height; ++row) {
+    for (int col = 0; col < m.width; ++col) {
+      const std::size_t c = static_cast<std::size_t>(row) * m.width + col;
+      if (std::isnan(m.elevation_m[c])) continue;
+      f(c, m.geotransform[0] + (col + 0.5) * m.geotransform[1],
+        m.geotransform[3] + (row + 0.5) * m.geotransform[5]);
+    }
+  }
+}
+
 class MosaicTest : public CommandFixture {
  protected:
   mosaic::MosaicResult Build(const std::vector<fs::path>& inputs, const std::string& out,
@@ -240,18 +253,12 @@ TEST_F(MosaicTest, OtherOriginsAndRotationsLandOnTheCommonGrid) {
   const io::DemRaster m = Read("m.tif");
   std::size_t checked = 0;
   std::size_t both = 0;
-  for (int row = 0; row < m.height; ++row) {
-    for (int col = 0; col < m.width; ++col) {
-      const std::size_t c = static_cast<std::size_t>(row) * m.width + col;
-      if (std::isnan(m.elevation_m[c])) continue;
-      const double x = m.geotransform[0] + (col + 0.5) * m.geotransform[1];
-      const double y = m.geotransform[3] + (row + 0.5) * m.geotransform[5];
-      if (where_a(x, y) == 2 || where_b(x, y) == 2) continue;
-      EXPECT_NEAR(m.elevation_m[c], Plane(0)(x, y).z, 2e-5) << col << " " << row;
-      both += m.count[c] == 2.0f;
-      ++checked;
-    }
-  }
+  ForEachCell(m, [&](std::size_t c, double x, double y) {
+    if (where_a(x, y) == 2 || where_b(x, y) == 2) return;
+    EXPECT_NEAR(m.elevation_m[c], Plane(0)(x, y).z, 2e-5) << c;
+    both += m.count[c] == 2.0f;
+    ++checked;
+  });
   EXPECT_GT(checked, 2000u);
   EXPECT_GT(both, 100u);
   // The rotated square reaches beyond A's east edge (x 500040): its corner at x ≈ 500062.5.
@@ -308,19 +315,13 @@ TEST_F(MosaicTest, AnotherUtmZoneIsReprojected) {
   std::size_t both = 0;
   std::size_t b_only = 0;
   double worst = 0.0;
-  for (int row = 0; row < m.height; ++row) {
-    for (int col = 0; col < m.width; ++col) {
-      const std::size_t c = static_cast<std::size_t>(row) * m.width + col;
-      if (std::isnan(m.elevation_m[c])) continue;
-      const double x = m.geotransform[0] + (col + 0.5) * m.geotransform[1];
-      const double y = m.geotransform[3] + (row + 0.5) * m.geotransform[5];
-      // Bilinear resampling reproduces the plane but in an input's outermost cells.
-      if (near_edge(x, y)) continue;
-      worst = std::max(worst, std::abs(double(m.elevation_m[c]) - plane_33(x, y).z));
-      both += m.count[c] == 2.0f;
-      b_only += x > ax + 41.0;
-    }
-  }
+  ForEachCell(m, [&](std::size_t c, double x, double y) {
+    // Bilinear resampling reproduces the plane but in an input's outermost cells.
+    if (near_edge(x, y)) return;
+    worst = std::max(worst, std::abs(double(m.elevation_m[c]) - plane_33(x, y).z));
+    both += m.count[c] == 2.0f;
+    b_only += x > ax + 41.0;
+  });
   // The zone change rotates B's grid by the convergence difference (about 4 degrees here)
   // and bends it slightly: bilinear resampling of the plane stays within a tenth of a mm.
   EXPECT_LT(worst, 1e-4);
@@ -402,16 +403,11 @@ TEST_F(MosaicTest, CoregistrationCorrectsAKnownShift) {
     const io::DemRaster m = Read(name);
     double sum = 0.0;
     std::size_t n = 0;
-    for (int row = 0; row < m.height; ++row) {
-      for (int col = 0; col < m.width; ++col) {
-        const float z = m.elevation_m[static_cast<std::size_t>(row) * m.width + col];
-        if (std::isnan(z)) continue;
-        const double e = z - truth(m.geotransform[0] + (col + 0.5) * m.geotransform[1],
-                                   m.geotransform[3] + (row + 0.5) * m.geotransform[5]);
-        sum += e * e;
-        ++n;
-      }
-    }
+    ForEachCell(m, [&](std::size_t c, double x, double y) {
+      const double e = m.elevation_m[c] - truth(x, y);
+      sum += e * e;
+      ++n;
+    });
     return std::sqrt(sum / n);
   };
   Build({dir_ / "a.tif", dir_ / "b.tif"}, "plain.tif", NoCoregistration());
@@ -597,20 +593,14 @@ TEST_F(MosaicOfReplayDems, OriginsInTwoZonesAndAltitudesAgree) {
   EXPECT_EQ(m.epsg, 32633);
   std::size_t both = 0;
   double worst = 0.0;
-  for (int row = 0; row < m.height; ++row) {
-    for (int col = 0; col < m.width; ++col) {
-      const std::size_t c = static_cast<std::size_t>(row) * m.width + col;
-      if (std::isnan(m.elevation_m[c])) continue;
-      const double e = m.geotransform[0] + (col + 0.5) * m.geotransform[1];
-      const double n = m.geotransform[3] + (row + 0.5) * m.geotransform[5];
-      // Heights above the first input's origin altitude (100 m).
-      worst = std::max(worst, std::abs(m.elevation_m[c] - (Truth(e, n) - 100.0)));
-      if (m.count[c] > 3.5f) {
-        ++both;
-        EXPECT_EQ(d[c], 0.0f) << col << " " << row;
-      }
+  ForEachCell(m, [&](std::size_t c, double e, double n) {
+    // Heights above the first input's origin altitude (100 m).
+    worst = std::max(worst, std::abs(m.elevation_m[c] - (Truth(e, n) - 100.0)));
+    if (m.count[c] > 3.5f) {
+      ++both;
+      EXPECT_EQ(d[c], 0.0f) << c;
     }
-  }
+  });
   // Half a cell's worth of slope (0.054 per metre) at the outermost cells, where bilinear
   // resampling has one neighbour fewer; without the altitude shift B would be 3 m off.
   EXPECT_LT(worst, 0.02);  // measured 0.013 m
