@@ -56,8 +56,8 @@ struct MosaicResult {
 /// z = Σ w_i z_i / Σ w_i, σ = (Σ w_i)^-1/2, count = Σ count_i, disagreement = Σ d_i + the inputs
 /// with |z_i − z| > disagreement_sigma · sqrt(σ_i² + σ²), where d_i is band 4 of an input that
 /// is itself a mosaic (0 for a dem.tif). `registration` are the matcher's options (the residual
-/// is forced to point-to-plane). When `report` is not empty, the per-input report is written
-/// there as JSON (atomically, after the mosaic).
+/// is forced to point-to-plane, use_uncertainty on). When `report` is not empty, the per-input
+/// report is written there as JSON (atomically, after the mosaic).
 /// @throw std::invalid_argument if `options` make no sense (message names the mosaic. key).
 /// @throw io::IoError naming the file if an input is missing, not a GeoTIFF, lacks the three
 ///        bands, a geotransform or a CRS, or if the output cannot be written.
