@@ -555,7 +555,16 @@ class MosaicOfReplayDems : public MosaicTest {
   static constexpr double kE0 = 264000.0;
   static constexpr double kN0 = 4986000.0;
 
-  void WriteTraverse(const fs::path& path, double lon_deg, double altitude_m) {
+  // Ellipsoidal height of a relief at zone-33 (E, N).
+  static double Relief33(double e, double n) {
+    return 100.0 + Relief(e - kE0 + 500000.0, n - kN0 + 4000000.0);
+  }
+
+  // A traverse's dem.tif on its own origin: `truth` (zone-33 coordinates), seen displaced by
+  // `shift` (zone-33 east, north, up: what it shows at p is the truth at p - shift).
+  template <typename F>
+  void WriteTraverse(const fs::path& path, double lon_deg, double altitude_m, F truth,
+                     double cell_m = 0.5, const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
     const io::Georeference georef(io::GeodeticOrigin{kLat, lon_deg, altitude_m});
     OGRSpatialReference from;
     OGRSpatialReference to;
@@ -565,17 +574,18 @@ class MosaicOfReplayDems : public MosaicTest {
     to.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
     std::unique_ptr<OGRCoordinateTransformation> ct(OGRCreateCoordinateTransformation(&from, &to));
     dem::ElevationMapOptions options;
-    options.cell_size_m = 0.5;
+    options.cell_size_m = cell_m;
     options.grid_rotation_rad = georef.convergence_rad();
     dem::ElevationMap map(options);
-    for (double y = -20.0; y <= 20.0; y += 0.25) {
-      for (double x = -20.0; x <= 20.0; x += 0.25) {
+    for (double y = -20.0; y <= 20.0; y += cell_m / 2) {
+      for (double x = -20.0; x <= 20.0; x += cell_m / 2) {
         const std::optional<dem::CellIndex> cell = map.WorldToCell(x, y);
         ASSERT_TRUE(cell);
         const Eigen::Vector2d centre = map.CellCenterWorld(*cell);
         Eigen::Vector2d p = georef.EnuToProjectedExact(centre.x(), centre.y());
         ASSERT_TRUE(ct->Transform(1, &p.x(), &p.y()));
-        map.SetCell(*cell, Truth(p.x(), p.y()) - altitude_m, 0.01 * 0.01);
+        const double h = truth(p.x() - shift.x(), p.y() - shift.y()) + shift.z();
+        map.SetCell(*cell, h - altitude_m, 0.01 * 0.01);
       }
     }
     io::WriteDemGeoTiff(path, map, georef);
@@ -583,8 +593,8 @@ class MosaicOfReplayDems : public MosaicTest {
 };
 
 TEST_F(MosaicOfReplayDems, OriginsInTwoZonesAndAltitudesAgree) {
-  WriteTraverse(dir_ / "a.tif", 11.9999, 100.0);  // zone 32
-  WriteTraverse(dir_ / "b.tif", 12.0002, 103.0);  // zone 33, 16 m east, 3 m higher origin
+  WriteTraverse(dir_ / "a.tif", 11.9999, 100.0, Truth);  // zone 32
+  WriteTraverse(dir_ / "b.tif", 12.0002, 103.0, Truth);  // zone 33, 16 m east, 3 m higher origin
   auto options = NoCoregistration();
   options.crs = "EPSG:32633";
   Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif", options);
@@ -605,6 +615,48 @@ TEST_F(MosaicOfReplayDems, OriginsInTwoZonesAndAltitudesAgree) {
   // resampling has one neighbour fewer; without the altitude shift B would be 3 m off.
   EXPECT_LT(worst, 0.02);  // measured 0.013 m
   EXPECT_GT(both, 1000u);
+}
+
+TEST_F(MosaicOfReplayDems, CoregistrationAcrossZones) {
+  // The output is in A's zone 32; B, in zone 33, is displaced by (0.2, 0, 0.1) m in zone-33
+  // coordinates: its correction is found in zone 32 and carried back into zone 33.
+  WriteTraverse(dir_ / "a.tif", 11.9999, 100.0, Relief33, 0.25);
+  WriteTraverse(dir_ / "b.tif", 12.0002, 103.0, Relief33, 0.25, Eigen::Vector3d(0.2, 0.0, 0.1));
+  OGRSpatialReference z32;
+  OGRSpatialReference z33;
+  z32.importFromEPSG(32632);
+  z33.importFromEPSG(32633);
+  z32.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  z33.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> to33(OGRCreateCoordinateTransformation(&z32, &z33));
+  auto rmse = [&](const std::string& name) {
+    const io::DemRaster m = Read(name);
+    EXPECT_EQ(m.epsg, 32632);
+    double sum = 0.0;
+    std::size_t n = 0;
+    ForEachCell(m, [&](std::size_t c, double x, double y) {
+      to33->Transform(1, &x, &y);
+      const double e = m.elevation_m[c] - (Relief33(x, y) - 100.0);
+      sum += e * e;
+      ++n;
+    });
+    return std::sqrt(sum / n);
+  };
+  Build({dir_ / "a.tif", dir_ / "b.tif"}, "plain.tif", NoCoregistration());
+  const mosaic::MosaicResult result =
+      Build({dir_ / "a.tif", dir_ / "b.tif"}, "coreg.tif", mosaic::MosaicOptions{});
+  const mosaic::InputReport& b = result.inputs[1];
+  EXPECT_TRUE(b.applied) << b.status;
+  // Zone 32's grid is turned by 4.24 degrees (the convergence at 12° E, 45° N, twice) against
+  // zone 33's: the 0.2 m east shift reads as (-0.1995, -0.0148) m there. Measured:
+  // (-0.1996, -0.0149, -0.1000) m; RMS over the overlap 0.098 -> 0.0009 m.
+  EXPECT_NEAR(b.translation_m.x(), -0.1995, 0.002);
+  EXPECT_NEAR(b.translation_m.y(), -0.0148, 0.002);
+  EXPECT_NEAR(b.translation_m.z(), -0.1, 0.002);
+  EXPECT_LT(b.rms_after_m, 0.005);
+  const double plain = rmse("plain.tif");
+  const double coregistered = rmse("coreg.tif");
+  EXPECT_LT(coregistered, 0.1 * plain);  // measured 0.064 -> 0.0014 m
 }
 
 }  // namespace
