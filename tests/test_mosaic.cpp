@@ -224,6 +224,36 @@ TEST_F(MosaicTest, PartialMosaicsEqualTheWhole) {
   }
 }
 
+TEST_F(MosaicTest, DisagreeingGroupsCountAsOneInputEach) {
+  // The documented limit of band 4's associativity. A and B say 0 m, C and D 0.5 m (σ 5 cm).
+  // At once: z = 0.25 m, σ = 2.5 cm; each input is 0.25 m off, beyond 3·sqrt(0.05² + 0.025²)
+  // = 0.17 m: 4. Grouped as (A+B)+(C+D): each pair agrees (0), and each pair, 0.25 m off the
+  // fused value with σ 3.5 cm, disagrees as one input: 2. Heights, σ and counts are equal.
+  const std::string crs = "EPSG:32633";
+  for (const char* name : {"a", "b", "c", "d"}) {
+    const float z = (name[0] == 'a' || name[0] == 'b') ? 0.0f : 0.5f;
+    WriteDem(dir_ / (std::string(name) + ".tif"), 4, 4, NorthUp(500000, 4000004, 1.0), crs,
+             Constant(z, 0.05f, 1));
+  }
+  const auto options = NoCoregistration();
+  Build({dir_ / "a.tif", dir_ / "b.tif", dir_ / "c.tif", dir_ / "d.tif"}, "all.tif", options);
+  Build({dir_ / "a.tif", dir_ / "b.tif"}, "ab.tif", options);
+  Build({dir_ / "c.tif", dir_ / "d.tif"}, "cd.tif", options);
+  Build({dir_ / "ab.tif", dir_ / "cd.tif"}, "grouped.tif", options);
+  const io::DemRaster all = Read("all.tif");
+  const io::DemRaster grouped = Read("grouped.tif");
+  const std::vector<float> d_all = Disagreement("all.tif");
+  const std::vector<float> d_grouped = Disagreement("grouped.tif");
+  for (std::size_t c = 0; c < 16; ++c) {
+    EXPECT_NEAR(all.elevation_m[c], 0.25, 1e-6);
+    EXPECT_NEAR(grouped.elevation_m[c], 0.25, 1e-6);
+    EXPECT_NEAR(grouped.stddev_m[c], all.stddev_m[c], 1e-8);
+    EXPECT_EQ(grouped.count[c], 4.0f);
+    EXPECT_EQ(d_all[c], 4.0f);
+    EXPECT_EQ(d_grouped[c], 2.0f);
+  }
+}
+
 TEST_F(MosaicTest, OtherOriginsAndRotationsLandOnTheCommonGrid) {
   const std::string crs = "EPSG:32633";
   WriteDem(dir_ / "a.tif", 40, 40, NorthUp(500000, 4000040, 1.0), crs, Plane(0.05f));
