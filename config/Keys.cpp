@@ -367,8 +367,10 @@ std::vector<KeyEntry> BuildRegistry() {
 
   using MO = mosaic::MosaicOptions;
   SectionKeys<MO> mos(keys, "mosaic", &Config::mosaic);
-  mos.Text("crs", &MO::crs, "output CRS (EPSG:32633, WKT, PROJ), projected in metres; \"\" = the first input's");
-  mos.Double("cell_size_m", &MO::cell_size_m, "m", AtLeast(0), "output cell edge; 0 = the finest input's");
+  mos.Text("crs", &MO::crs,
+           "output CRS (EPSG:32633, WKT, PROJ), projected in metres; \"\" = the first input's");
+  mos.Double("cell_size_m", &MO::cell_size_m, "m", AtLeast(0),
+             "output cell edge; 0 = the finest input's");
   mos.Double("disagreement_sigma", &MO::disagreement_sigma, "sigma", GreaterThan(0),
              "band 4 counts inputs beyond this many combined sigmas of the fused height");
   mos.Int("tile_cells", &MO::tile_cells, "cells", AtLeast(16),
