@@ -10,6 +10,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -68,6 +69,18 @@ void WriteDem(const fs::path& path, int width, int height, const std::array<doub
               CE_None);
   }
   GDALClose(ds);
+}
+
+// (x, y) from one EPSG CRS into another, x easting first.
+std::unique_ptr<OGRCoordinateTransformation> EpsgTransform(int from_epsg, int to_epsg) {
+  OGRSpatialReference from;
+  OGRSpatialReference to;
+  from.importFromEPSG(from_epsg);
+  to.importFromEPSG(to_epsg);
+  from.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  to.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  return std::unique_ptr<OGRCoordinateTransformation>(
+      OGRCreateCoordinateTransformation(&from, &to));
 }
 
 std::array<double, 6> NorthUp(double x0, double y0, double cell) {
@@ -298,14 +311,8 @@ TEST_F(MosaicTest, OtherOriginsAndRotationsLandOnTheCommonGrid) {
 TEST_F(MosaicTest, AnotherUtmZoneIsReprojected) {
   // Near 12° E, the edge of zones 32 and 33: A in zone 33, B in zone 32, the same plane
   // (defined in zone-33 coordinates) sampled at B's cells.
-  OGRSpatialReference z32;
-  OGRSpatialReference z33;
-  z32.importFromEPSG(32632);
-  z33.importFromEPSG(32633);
-  z32.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  z33.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> to33(OGRCreateCoordinateTransformation(&z32, &z33));
-  std::unique_ptr<OGRCoordinateTransformation> to32(OGRCreateCoordinateTransformation(&z33, &z32));
+  const auto to33 = EpsgTransform(32632, 32633);
+  const auto to32 = EpsgTransform(32633, 32632);
   // A's corner in zone 33 (easting 264 km: 45° N, 12° E), and B's corner: nearby, seen from
   // zone 32.
   const double ax = 264000.0;
@@ -496,6 +503,14 @@ TEST_F(MosaicTest, CommandWritesTheMosaicAndRefusesToOverwrite) {
 
 class MosaicErrorTest : public MosaicTest {
  protected:
+  // `rovermap mosaic INPUT`: exit 1, `message` on stderr, nothing written.
+  void ExpectIoError(const std::string& input, const std::string& message) {
+    const CommandResult r =
+        Rovermap("mosaic " + (dir_ / input).string() + " --out " + (dir_ / "m.tif").string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    ExpectNoOutput({input});
+  }
   // Nothing but the inputs is left in the folder.
   void ExpectNoOutput(const std::vector<std::string>& inputs) {
     for (const auto& entry : fs::directory_iterator(dir_)) {
@@ -518,20 +533,12 @@ TEST_F(MosaicErrorTest, MissingInputIsAnIoError) {
 
 TEST_F(MosaicErrorTest, OneBandTifIsAnIoError) {
   WriteDem(dir_ / "one.tif", 8, 8, NorthUp(500000, 4000008, 1.0), "EPSG:32633", Plane(0.05f), 1);
-  const CommandResult r =
-      Rovermap("mosaic " + (dir_ / "one.tif").string() + " --out " + (dir_ / "m.tif").string());
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("one.tif: has 1 band(s)"), std::string::npos) << r.err;
-  ExpectNoOutput({"one.tif"});
+  ExpectIoError("one.tif", "one.tif: has 1 band(s)");
 }
 
 TEST_F(MosaicErrorTest, NotAGeoTiffIsAnIoError) {
   Write("text.tif", "not a raster\n");
-  const CommandResult r =
-      Rovermap("mosaic " + (dir_ / "text.tif").string() + " --out " + (dir_ / "m.tif").string());
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("text.tif: not a GeoTIFF"), std::string::npos) << r.err;
-  ExpectNoOutput({"text.tif"});
+  ExpectIoError("text.tif", "text.tif: not a GeoTIFF");
 }
 
 TEST_F(MosaicErrorTest, BadKeysAreConfigErrors) {
@@ -596,13 +603,7 @@ class MosaicOfReplayDems : public MosaicTest {
   void WriteTraverse(const fs::path& path, double lon_deg, double altitude_m, F truth,
                      double cell_m = 0.5, const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
     const io::Georeference georef(io::GeodeticOrigin{kLat, lon_deg, altitude_m});
-    OGRSpatialReference from;
-    OGRSpatialReference to;
-    from.importFromEPSG(georef.epsg());
-    to.importFromEPSG(32633);
-    from.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-    to.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-    std::unique_ptr<OGRCoordinateTransformation> ct(OGRCreateCoordinateTransformation(&from, &to));
+    const auto ct = EpsgTransform(georef.epsg(), 32633);
     dem::ElevationMapOptions options;
     options.cell_size_m = cell_m;
     options.grid_rotation_rad = georef.convergence_rad();
@@ -652,13 +653,7 @@ TEST_F(MosaicOfReplayDems, CoregistrationAcrossZones) {
   // coordinates: its correction is found in zone 32 and carried back into zone 33.
   WriteTraverse(dir_ / "a.tif", 11.9999, 100.0, Relief33, 0.25);
   WriteTraverse(dir_ / "b.tif", 12.0002, 103.0, Relief33, 0.25, Eigen::Vector3d(0.2, 0.0, 0.1));
-  OGRSpatialReference z32;
-  OGRSpatialReference z33;
-  z32.importFromEPSG(32632);
-  z33.importFromEPSG(32633);
-  z32.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  z33.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> to33(OGRCreateCoordinateTransformation(&z32, &z33));
+  const auto to33 = EpsgTransform(32632, 32633);
   auto rmse = [&](const std::string& name) {
     const io::DemRaster m = Read(name);
     EXPECT_EQ(m.epsg, 32632);
