@@ -80,6 +80,16 @@ CLI::App* AddImportCommand(CLI::App* app, ImportArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunImport(const ImportArgs& args);
 
+struct MosaicArgs {
+  ConfigArgs config;
+  std::vector<std::string> inputs;  ///< dem.tif files (or mosaics)
+  std::string out;                  ///< output COG; mosaic.json goes beside it
+  bool force = false;               ///< replace an existing output
+};
+CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunMosaic(const MosaicArgs& args);
+
 /// Opens a recording (io::OpenFrameSource with the `bag.` options) and tells stderr, as
 /// `command`, what it skipped. @throw io::IoError naming the recording.
 std::unique_ptr<io::FrameSource> OpenRecording(const std::string& path, const config::Config& cfg,

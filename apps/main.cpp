@@ -57,6 +57,8 @@ int main(int argc, char** argv) {
   CLI::App* import_cmd = AddImportCommand(&app, &import_args);
   ServeArgs serve_args;
   CLI::App* serve_cmd = AddServeCommand(&app, &serve_args);
+  MosaicArgs mosaic_args;
+  CLI::App* mosaic_cmd = AddMosaicCommand(&app, &mosaic_args);
 
   try {
     app.parse(argc, argv);
@@ -72,6 +74,7 @@ int main(int argc, char** argv) {
     if (replay_cmd->parsed()) return RunReplay(replay_args);
     if (serve_cmd->parsed()) return RunServe(serve_args);
     if (import_cmd->parsed()) return RunImport(import_args);
+    if (mosaic_cmd->parsed()) return RunMosaic(mosaic_args);
   } catch (const rovermap::config::ConfigError& e) {
     std::cerr << "rovermap: config error: " << e.what() << "\n";
     return kExitUsage;

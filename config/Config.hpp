@@ -13,6 +13,7 @@
 #include "io/BagOptions.hpp"  // header-only: config does not link io
 #include "mapper/MapperOptions.hpp"
 #include "mapper/ServeOptions.hpp"
+#include "mosaic/MosaicOptions.hpp"  // header-only: config does not link mosaic
 #include "registration/Options.hpp"
 #include "sim/SimOptions.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -43,6 +44,7 @@ struct Config {
   mapper::MapperOptions mapper;
   mapper::ServeOptions serve;
   BagConfig bag;
+  mosaic::MosaicOptions mosaic;
 };
 
 /// The options a bag is read with: T_body_sensor from its translation and angles, the origin

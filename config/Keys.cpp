@@ -369,6 +369,21 @@ std::vector<KeyEntry> BuildRegistry() {
   origin_key("origin_altitude_m", &B::origin_altitude_m, "m", AnyValue(), "geodetic origin");
   bag.Enum<std::string>("body", &B::body, kBodyNames, "the body the rover drove on");
 
+  using MO = mosaic::MosaicOptions;
+  SectionKeys<MO> mos(keys, "mosaic", &Config::mosaic);
+  mos.Text("crs", &MO::crs,
+           "output CRS (EPSG:32633, WKT, PROJ), projected in metres; \"\" = the first input's");
+  mos.Double("cell_size_m", &MO::cell_size_m, "m", AtLeast(0),
+             "output cell edge; 0 = the finest input's");
+  mos.Double("disagreement_sigma", &MO::disagreement_sigma, "sigma", GreaterThan(0),
+             "band 4 counts inputs beyond this many combined sigmas of the fused height");
+  mos.Int("tile_cells", &MO::tile_cells, "cells", AtLeast(16),
+          "edge of the square tiles fused one at a time (memory)");
+  mos.Bool("coregister", &MO::coregister,
+           "register each input onto the mosaic of those before it (point-to-plane)");
+  mos.Int("min_overlap_cells", &MO::min_overlap_cells, "cells", AtLeast(3),
+          "less overlap: the input is placed as it is and flagged");
+
   return keys;
 }
 
@@ -492,6 +507,19 @@ std::string ParseName(const YAML::Node& node, bool allow_empty) {
       throw ValueError("not a topic or frame name (letters, digits, _ / . -; got " + text + ")");
   }
   return text;
+}
+
+std::string QuoteText(const std::string& text) {
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '\n') {
+      quoted += "\\n";
+      continue;
+    }
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  return quoted + "\"";
 }
 
 std::string FormatDouble(double value) {

@@ -70,6 +70,8 @@ double ParseDouble(const YAML::Node& node, const Bounds& bounds);
 bool ParseBool(const YAML::Node& node);
 /// A ROS topic or frame name; a null or "" value is "" when `allow_empty`.
 std::string ParseName(const YAML::Node& node, bool allow_empty);
+/// `text` in YAML double quotes (backslashes and quotes escaped).
+std::string QuoteText(const std::string& text);
 /// Shortest text that reads back to the same double, always with a '.' or exponent.
 std::string FormatDouble(double value);
 
@@ -165,6 +167,16 @@ class SectionKeys {
           const std::string& name = (c.*s).*field;
           return name.empty() ? std::string("\"\"") : name;
         });
+  }
+
+  /// Free text (any characters, "" allowed), printed double-quoted.
+  void Text(const std::string& key, std::string Section::*field, const std::string& doc) {
+    Add(
+        key, "[text] " + doc,
+        [s = section_, field](const YAML::Node& n, Config& c) {
+          (c.*s).*field = n.IsNull() ? std::string() : ScalarText(n);
+        },
+        [s = section_, field](const Config& c) { return QuoteText((c.*s).*field); });
   }
 
   void Bool(const std::string& key, bool Section::*field, const std::string& doc) {

@@ -1,0 +1,72 @@
+#pragma once
+// `rovermap mosaic`: many dem.tif files (DESIGN §6) fused into one north-up COG on a common grid.
+// Each input is resampled onto the output grid with GDAL's warper, tile by tile, optionally
+// after co-registration onto the mosaic of the inputs before it, and fused by inverse variance.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "mosaic/MosaicOptions.hpp"
+#include "registration/Options.hpp"
+
+namespace rovermap::mosaic {
+
+/// Output band numbers (1-based, GDAL order).
+constexpr int kElevationBand = 1;     ///< fused elevation [m]
+constexpr int kStddevBand = 2;        ///< fused standard deviation [m]
+constexpr int kCountBand = 3;         ///< summed point count
+constexpr int kDisagreementBand = 4;  ///< inputs beyond disagreement_sigma of the fused value
+
+/// What co-registration did to one input (all zero for the first input and when it is off).
+struct InputReport {
+  std::string file;
+  bool reference = false;  ///< the first input: the others are registered onto it and on
+  bool overlaps = false;   ///< enough overlap with the inputs before it to register
+  bool applied = false;    ///< a correction was applied
+  std::string status;      ///< "reference", "registered", "no_overlap", "failed: ...", "off"
+  Eigen::Vector3d translation_m = Eigen::Vector3d::Zero();  ///< [m] east, north, up
+  Eigen::Vector3d rotation_deg = Eigen::Vector3d::Zero();   ///< [deg] rotation vector
+  std::size_t overlap_cells = 0;  ///< output cells both it and the mosaic before it cover
+  double inlier_ratio = 0.0;      ///< the matcher's inliers / sampled points
+  int iterations = 0;
+  std::size_t disagreement_before = 0;  ///< overlap cells beyond disagreement_sigma, uncorrected
+  std::size_t disagreement_after = 0;   ///< the same after the correction
+  double rms_before_m = 0.0;            ///< [m] RMS height difference over the overlap
+  double rms_after_m = 0.0;             ///< [m]
+};
+
+/// What was written.
+struct MosaicResult {
+  int width = 0;                         ///< [cells]
+  int height = 0;                        ///< [cells]
+  std::array<double, 6> geotransform{};  ///< GDAL order, north-up
+  std::string wkt;                       ///< output CRS
+  double cell_size_m = 0.0;              ///< [m]
+  int tiles = 0;                         ///< tiles fused
+  std::size_t valid_cells = 0;           ///< cells with a fused elevation
+  std::vector<InputReport> inputs;       ///< one per input, in order
+};
+
+/// Fuses `inputs` into the COG `out`, written atomically (temporary files in its folder, then a
+/// rename; none is left behind on failure). Per cell, with w_i = 1/σ_i²:
+/// z = Σ w_i z_i / Σ w_i, σ = (Σ w_i)^-1/2, count = Σ count_i, disagreement = Σ d_i + the inputs
+/// with |z_i − z| > disagreement_sigma · sqrt(σ_i² + σ²), where d_i is band 4 of an input that
+/// is itself a mosaic (0 for a dem.tif). `registration` are the matcher's options (the residual
+/// is forced to point-to-plane, use_uncertainty on). When `report` is not empty, the per-input
+/// report is written there as JSON (atomically, after the mosaic).
+/// @throw std::invalid_argument if `options` make no sense (message names the mosaic. key).
+/// @throw io::IoError naming the file if an input is missing, not a GeoTIFF, lacks the three
+///        bands, a geotransform or a CRS, or if the output cannot be written.
+MosaicResult BuildMosaic(const std::vector<std::filesystem::path>& inputs,
+                         const std::filesystem::path& out, const std::filesystem::path& report,
+                         const MosaicOptions& options,
+                         const registration::RegistrationOptions& registration);
+
+/// The report as JSON text (mosaic.json).
+std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& options);
+
+}  // namespace rovermap::mosaic
