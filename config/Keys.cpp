@@ -176,6 +176,12 @@ std::vector<KeyEntry> BuildRegistry() {
   sim.Enum("path", &M::path, kPathShapeNames, "rover path shape");
   sim.Double("turn_radius_m", &M::turn_radius_m, "m", GreaterThan(0),
              "loop radius / tightest curve radius");
+  sim.Double("start_x_m", &M::start_x_m, "m", AnyValue(),
+             "start position east of the terrain's centre");
+  sim.Double("start_y_m", &M::start_y_m, "m", AnyValue(),
+             "start position north of the terrain's centre");
+  sim.Double("start_yaw_deg", &M::start_yaw_deg, "deg", AnyValue(),
+             "start heading, from east counter-clockwise");
   sim.Double("wheelbase_m", &M::wheelbase_m, "m", GreaterThan(0), "pitch from the terrain");
   sim.Double("track_m", &M::track_m, "m", GreaterThan(0), "roll from the terrain");
   sim.Enum("sensor", &M::sensor, kSensorKindNames, "stereo images or PLY clouds");
@@ -202,6 +208,8 @@ std::vector<KeyEntry> BuildRegistry() {
   sim.Double("pixel_sigma_px", &M::pixel_sigma_px, "px", AtLeast(0), "cloud mode: image noise");
   sim.Double("outlier_fraction", &M::outlier_fraction, "ratio", Bounds{0, false, 1, false},
              "cloud mode: points at a random depth");
+  sim.Int("odometry_seed", &M::odometry_seed, "count", AnyValue(),
+          "seeds the odometry errors alone; 0 = sim.seed");
   sim.Double("odom_scale_error", &M::odom_scale_error, "ratio", GreaterThan(-1),
              "wheel odometry scale error");
   sim.Double("odom_slip_mean", &M::odom_slip_mean, "ratio", GreaterThan(-1), "mean slip");

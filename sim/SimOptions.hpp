@@ -34,6 +34,11 @@ struct SimOptions {
   // Rover and path.
   PathShape path = PathShape::kCurves;
   double turn_radius_m = 6.0;  ///< loop radius / tightest curve radius
+  // Start pose in the terrain's frame: the path is driven from it. The terrain (relief,
+  // craters, rocks) does not depend on it, so traverses from other start poses see one ground.
+  double start_x_m = 0.0;      ///< start position east of the terrain's centre [m]
+  double start_y_m = 0.0;      ///< start position north of the terrain's centre [m]
+  double start_yaw_deg = 0.0;  ///< start heading, from east counter-clockwise [deg]
   double wheelbase_m = 0.6;    ///< front-back wheel distance (pitch from the terrain)
   double track_m = 0.5;        ///< left-right wheel distance (roll from the terrain)
 
@@ -58,6 +63,7 @@ struct SimOptions {
   double outlier_fraction = 0.01;  ///< points moved to a random depth on their ray
 
   // Dead reckoning.
+  int odometry_seed = 0;                       ///< seeds the odometry errors alone; 0 = sim.seed's
   double odom_scale_error = 0.02;              ///< wheel odometry distance scale error (ratio)
   double odom_slip_mean = 0.01;                ///< mean extra wheel travel from slip (ratio)
   double odom_slip_sigma = 0.02;               ///< per-step slip σ (ratio)

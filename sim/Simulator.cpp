@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -86,6 +87,15 @@ Simulator::Path Simulator::MakePath(const SimOptions& o) {
     }
   }
   path.dense_xy.insert(path.dense_xy.begin(), Eigen::Vector2d(0, 0));
+  // The frames are driven from the start pose; dense_xy stays the path from the default start
+  // pose (the origin, heading east), so that the rocks do not depend on the start pose.
+  const double start_yaw = o.start_yaw_deg * kDegToRad;
+  const Eigen::Rotation2Dd R_start(start_yaw);
+  const Eigen::Vector2d start(o.start_x_m, o.start_y_m);
+  for (std::size_t k = 0; k < path.frame_xy.size(); ++k) {
+    path.frame_xy[k] = start + R_start * path.frame_xy[k];
+    path.frame_heading[k] += start_yaw;
+  }
   return path;
 }
 
@@ -111,8 +121,14 @@ Simulator::Simulator(const SimOptions& options)
     };
     const double L = o.wheelbase_m / 2, W = o.track_m / 2;
     const double fl = ground(L, W), fr = ground(L, -W), rl = ground(-L, W), rr = ground(-L, -W);
-    Require(std::isfinite(fl + fr + rl + rr),
-            "the rover path leaves the terrain (larger terrain_size_m)");
+    if (!std::isfinite(fl + fr + rl + rr)) {
+      std::ostringstream message;
+      message << "sim: the rover leaves the terrain square (+-" << 0.5 * o.terrain_size_m
+              << " m) at frame " << k << ", at x " << p.x() << " m, y " << p.y()
+              << " m: change sim.start_x_m, sim.start_y_m or sim.start_yaw_deg, or use fewer "
+                 "sim.frames or a larger sim.terrain_size_m";
+      throw std::invalid_argument(message.str());
+    }
     const double pitch = std::atan2(0.5 * (rl + rr) - 0.5 * (fl + fr), o.wheelbase_m);
     const double roll = std::atan2(0.5 * (fl + rl) - 0.5 * (fr + rr), o.track_m);
     io::StampedPose pose;
@@ -126,16 +142,17 @@ Simulator::Simulator(const SimOptions& options)
   // heading increment off by bias·dt plus a random walk; roll and pitch from the (true)
   // inclinometers; integrated in 3-D from the true first pose.
   const double dt = 1.0 / o.frame_rate_hz;
+  const int odometry_seed = o.odometry_seed != 0 ? o.odometry_seed : o.seed;
   odometry_.push_back(truth_[0]);
   double yaw_error = 0.0;
   for (int k = 1; k < o.frames; ++k) {
     const Eigen::Isometry3d delta = truth_[k - 1].T_world_body.inverse() * truth_[k].T_world_body;
     const double slip =
-        o.odom_slip_mean + o.odom_slip_sigma * HashNormal(o.seed, kSaltOdometry, k, 0);
+        o.odom_slip_mean + o.odom_slip_sigma * HashNormal(odometry_seed, kSaltOdometry, k, 0);
     const double scale = (1.0 + o.odom_scale_error) * (1.0 + slip);
     yaw_error += o.heading_bias_deg_s * kDegToRad * dt +
                  o.heading_random_walk_deg_rt_s * kDegToRad * std::sqrt(dt) *
-                     HashNormal(o.seed, kSaltOdometry, k, 1);
+                     HashNormal(odometry_seed, kSaltOdometry, k, 1);
     const Eigen::Matrix3d& R_prev_est = odometry_.back().T_world_body.linear();
     const Eigen::Vector3d step_world = R_prev_est * (scale * delta.translation());
     const Eigen::Vector3d rpy_true = [&] {

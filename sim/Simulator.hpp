@@ -68,8 +68,8 @@ class Simulator {
   Eigen::Isometry3d CameraPose(std::size_t index, bool right) const;
 
   struct Path {
-    std::vector<Eigen::Vector2d> dense_xy;  // every few cm (for the rock keep-out)
-    std::vector<Eigen::Vector2d> frame_xy;  // per frame
+    std::vector<Eigen::Vector2d> dense_xy;  // every few cm from the default start pose (rocks)
+    std::vector<Eigen::Vector2d> frame_xy;  // per frame, from the start pose
     std::vector<double> frame_heading;      // per frame [rad]
   };
   static Path MakePath(const SimOptions& options);

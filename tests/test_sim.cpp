@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <numeric>
 #include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "io/FileUtil.hpp"
@@ -269,6 +271,62 @@ TEST(Simulator, ErrorFreeOdometryIsTheTruthAndScaleErrorScalesTheDistance) {
                               scaled.odometry().front().T_world_body.translation())
                                  .norm();
   EXPECT_NEAR(odom_length / true_length, 1.05, 0.002);
+}
+
+TEST(Simulator, StartPoseMovesThePathOverTheSameTerrain) {
+  SimOptions o = Tiny();
+  o.frames = 10;
+  const Simulator origin(o);
+  o.start_x_m = 2.0;
+  o.start_y_m = -1.5;
+  o.start_yaw_deg = 120.0;
+  const Simulator moved(o);
+  // The same ground, sample for sample.
+  ASSERT_EQ(moved.terrain().samples(), origin.terrain().samples());
+  for (int j = 0; j < origin.terrain().samples(); j += 7) {
+    for (int i = 0; i < origin.terrain().samples(); i += 7) {
+      ASSERT_EQ(moved.terrain().Sample(i, j), origin.terrain().Sample(i, j)) << i << " " << j;
+    }
+  }
+  // The path is the default one turned by the start yaw and moved to the start position; the
+  // height, roll and pitch follow the terrain there.
+  const Eigen::Rotation2Dd R(120.0 * M_PI / 180.0);
+  for (std::size_t k = 0; k < origin.truth().size(); ++k) {
+    const Eigen::Vector3d& p0 = origin.truth()[k].T_world_body.translation();
+    const Eigen::Vector3d& p = moved.truth()[k].T_world_body.translation();
+    const Eigen::Vector2d expected = Eigen::Vector2d(2.0, -1.5) + R * p0.head<2>();
+    EXPECT_NEAR((p.head<2>() - expected).norm(), 0.0, 1e-9) << k;
+    const Eigen::Matrix3d& R0 = origin.truth()[k].T_world_body.linear();
+    const Eigen::Matrix3d& R1 = moved.truth()[k].T_world_body.linear();
+    const double yaw0 = std::atan2(R0(1, 0), R0(0, 0));
+    const double yaw1 = std::atan2(R1(1, 0), R1(0, 0));
+    EXPECT_NEAR(std::remainder(yaw1 - yaw0 - 120.0 * M_PI / 180.0, 2 * M_PI), 0.0, 1e-9) << k;
+  }
+  EXPECT_TRUE(moved.odometry()[0].T_world_body.isApprox(moved.truth()[0].T_world_body, 1e-12));
+
+  // The odometry seed changes the drift alone.
+  o.odometry_seed = 7;
+  const Simulator reseeded(o);
+  for (std::size_t k = 0; k < moved.truth().size(); ++k) {
+    EXPECT_TRUE(reseeded.truth()[k].T_world_body.isApprox(moved.truth()[k].T_world_body, 0.0));
+  }
+  EXPECT_FALSE(
+      reseeded.odometry().back().T_world_body.isApprox(moved.odometry().back().T_world_body, 1e-9));
+  // odometry_seed equal to seed is the default.
+  o.odometry_seed = o.seed;
+  const Simulator same(o);
+  EXPECT_TRUE(
+      same.odometry().back().T_world_body.isApprox(moved.odometry().back().T_world_body, 0.0));
+
+  // A start at the edge of the square, heading out of it: refused, naming the keys.
+  o.start_x_m = 7.9;
+  o.start_yaw_deg = 0.0;
+  try {
+    Simulator outside(o);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sim.start_x_m"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Simulator, CloudModeFollowsTheStereoErrorModel) {
