@@ -356,7 +356,6 @@ struct CheckpointAccess {
       for (const FrameResult& f : m->results_) steps.push_back(f.step);
       m->chain_ = std::make_unique<PoseChain>(std::move(steps));
     }
-    m->odometry_bias_ = m->results_.empty() ? Vector6d::Zero() : m->results_.back().odometry_bias;
     m->attitude_.RestoreVariance(r->Get<double>());
     const bool has_reference = r->Get<std::uint8_t>() != 0;
     const auto reference = r->Get<std::uint64_t>();

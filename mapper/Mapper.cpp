@@ -147,14 +147,13 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
   // estimate of dead reckoning's bias.
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
-  if (reg.T_world_body && !r.step.fallback) odometry_bias_ = reg.odometry_bias;
+  r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
 
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
-  r.odometry_bias = odometry_bias_;
   KeepAsReference(std::move(source), r.step, r.reference_distance_m);
   r.time.total_ms = loaded.stereo_ms + prepared.prepare_ms + MsSince(start);
   results_.push_back(r);
@@ -216,7 +215,7 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   meta.T_world_body_odom = T_world_body_odom;
   r.step = Chain(meta, std::nullopt, Matrix6d::Zero());
   r.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
-  r.odometry_bias = odometry_bias_;
+  r.odometry_bias = OdometryBias();
   results_.push_back(r);
   return r;
 }
@@ -263,7 +262,7 @@ Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
 Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedCloud& source,
                                                  const Eigen::Isometry3d& T_world_body_odom) {
   Registered out;
-  out.odometry_bias = odometry_bias_;
+  out.odometry_bias = OdometryBias();
   if (!chain_) return out;  // frame 0: the chain starts at its dead-reckoning pose
   if (!reference_index_) {
     out.reason = FallbackReason::kNoReference;
@@ -306,7 +305,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // correction that is left against what odometry can be wrong by.
   const BlendedIncrement blended =
       BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
-                     options_.mapper.min_information, odometry_covariance, odometry_bias_,
+                     options_.mapper.min_information, odometry_covariance, OdometryBias(),
                      options_.mapper.bias_min_information);
   if (blended.constrained == 0) {
     out.reason = FallbackReason::kRegistrationFailed;
@@ -324,7 +323,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   out.odometry_directions = blended.odometry_directions;
   out.T_world_body = T_world_ref * blended.T;
   out.odometry_bias =
-      BoundedBias(odometry_bias_ + options_.mapper.odometry_bias_rate * blended.bias_innovation,
+      BoundedBias(OdometryBias() + options_.mapper.odometry_bias_rate * blended.bias_innovation,
                   odometry_covariance);
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);

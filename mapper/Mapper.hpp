@@ -183,6 +183,10 @@ class Mapper {
   ChainStep Chain(const io::Frame& frame, const std::optional<Eigen::Isometry3d>& T_world_body,
                   const Matrix6d& covariance_in_previous);
   Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment) const;
+  /// Dead reckoning's estimated bias per increment (see BlendIncrement): the last frame's.
+  Vector6d OdometryBias() const {
+    return results_.empty() ? Vector6d::Zero() : results_.back().odometry_bias;
+  }
   void Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
             const ChainStep& step, FrameResult* result);
   void KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud, const ChainStep& step,
@@ -202,7 +206,6 @@ class Mapper {
   std::unique_ptr<registration::IndexedCloud> previous_;
   LocalMap local_map_;
   double last_reference_distance_m_ = 0.0;
-  Vector6d odometry_bias_ = Vector6d::Zero();  ///< dead reckoning's, see BlendIncrement
   std::vector<FrameResult> results_;
 };
 
