@@ -6,7 +6,7 @@ FUZZ_TIME  ?= 300
 JOBS       ?= $(shell nproc)
 DEMO_OUT   ?= out/demo
 
-.PHONY: deps build demo test test-asan fuzz-build fuzz fuzz-smoke bench clean
+.PHONY: deps build demo test test-asan test-slurm fuzz-build fuzz fuzz-smoke bench clean
 
 deps:
 	@bash scripts/install_deps.sh
@@ -21,13 +21,17 @@ demo: build
 	@bash scripts/demo.sh $(BUILD)/apps/rovermap $(DEMO_OUT)
 
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -LE slurm
+
+# The campaign on a real single-node Slurm cluster, started for the test and stopped after it.
+test-slurm: build
+	@bash scripts/slurm/test.sh $(BUILD)
 
 # The same suite under AddressSanitizer + UndefinedBehaviorSanitizer (Debug-ish, -O1).
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DROVERMAP_SANITIZE=ON -DROVERMAP_BUILD_BENCH=OFF
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -LE slurm
 
 # libFuzzer targets (tests/fuzz) with ASan + UBSan, built with clang in their own folder.
 fuzz-build: deps

@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -89,6 +90,35 @@ struct MosaicArgs {
 CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunMosaic(const MosaicArgs& args);
+
+struct CampaignArgs {
+  ConfigArgs config;
+  std::vector<std::string> inputs;  ///< recordings (sequence directories or bags)
+  std::string list;                 ///< a file naming more, one per line
+  std::string out;                  ///< the campaign folder
+  bool local = false;               ///< run the tasks here (the default)
+  bool slurm = false;               ///< submit them with sbatch
+  bool wait = false;                ///< with slurm: until the campaign has ended
+  int jobs = 0;                     ///< local tasks at once; 0 = from the cores
+};
+CLI::App* AddCampaignCommand(CLI::App* app, CampaignArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunCampaign(const CampaignArgs& args);
+
+/// `rovermap campaign-task STEP DIR INDEX`: one task of a campaign (internal; what the Slurm
+/// scripts and --local run).
+struct CampaignTaskArgs {
+  std::string step;
+  std::string dir;
+  int index = 0;
+};
+CLI::App* AddCampaignTaskCommand(CLI::App* app, CampaignTaskArgs* args);
+/// Never throws for the step's own errors: they go to its status file and log.
+int RunCampaignTask(const CampaignTaskArgs& args);
+
+/// Runs `command`, turning the typed errors into a message on stderr and the exit status of
+/// DESIGN §5, as main does; the message (without "rovermap: ") also goes to `message`.
+int RunReportingErrors(const std::function<int()>& command, std::string* message = nullptr);
 
 /// Opens a recording (io::OpenFrameSource with the `bag.` options) and tells stderr, as
 /// `command`, what it skipped. @throw io::IoError naming the recording.

@@ -28,6 +28,29 @@ rovermap::config::Config rovermap::apps::LoadConfigArgs(const ConfigArgs& args) 
   return rovermap::config::LoadConfig(std::filesystem::path(args.config_file), args.overrides);
 }
 
+int rovermap::apps::RunReportingErrors(const std::function<int()>& command, std::string* message) {
+  std::string text;
+  int status = kExitOk;
+  try {
+    return command();
+  } catch (const rovermap::config::ConfigError& e) {
+    text = std::string("config error: ") + e.what();
+    status = kExitUsage;
+  } catch (const UsageError& e) {
+    text = e.what();
+    status = kExitUsage;
+  } catch (const rovermap::io::IoError& e) {
+    text = e.what();
+    status = kExitFailure;
+  } catch (const std::exception& e) {
+    text = std::string("error: ") + e.what();
+    status = kExitFailure;
+  }
+  std::cerr << "rovermap: " << text << "\n";
+  if (message != nullptr) *message = text;
+  return status;
+}
+
 int main(int argc, char** argv) {
   // Past a file-size limit (ulimit -f) write() fails with EFBIG, reported like a full disk,
   // instead of the signal killing the process in the middle of a write.
@@ -59,6 +82,10 @@ int main(int argc, char** argv) {
   CLI::App* serve_cmd = AddServeCommand(&app, &serve_args);
   MosaicArgs mosaic_args;
   CLI::App* mosaic_cmd = AddMosaicCommand(&app, &mosaic_args);
+  CampaignArgs campaign_args;
+  CLI::App* campaign_cmd = AddCampaignCommand(&app, &campaign_args);
+  CampaignTaskArgs campaign_task_args;
+  CLI::App* campaign_task_cmd = AddCampaignTaskCommand(&app, &campaign_task_args);
 
   try {
     app.parse(argc, argv);
@@ -67,7 +94,7 @@ int main(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   }
 
-  try {
+  return RunReportingErrors([&] {
     if (register_cmd->parsed()) return RunRegister(register_args);
     if (simulate_cmd->parsed()) return RunSimulate(simulate_args);
     if (eval_cmd->parsed()) return RunEval(eval_args);
@@ -75,18 +102,8 @@ int main(int argc, char** argv) {
     if (serve_cmd->parsed()) return RunServe(serve_args);
     if (import_cmd->parsed()) return RunImport(import_args);
     if (mosaic_cmd->parsed()) return RunMosaic(mosaic_args);
-  } catch (const rovermap::config::ConfigError& e) {
-    std::cerr << "rovermap: config error: " << e.what() << "\n";
+    if (campaign_cmd->parsed()) return RunCampaign(campaign_args);
+    if (campaign_task_cmd->parsed()) return RunCampaignTask(campaign_task_args);
     return kExitUsage;
-  } catch (const UsageError& e) {
-    std::cerr << "rovermap: " << e.what() << "\n";
-    return kExitUsage;
-  } catch (const rovermap::io::IoError& e) {
-    std::cerr << "rovermap: " << e.what() << "\n";
-    return kExitFailure;
-  } catch (const std::exception& e) {
-    std::cerr << "rovermap: error: " << e.what() << "\n";
-    return kExitFailure;
-  }
-  return kExitUsage;
+  });
 }

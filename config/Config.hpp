@@ -6,6 +6,7 @@
 #include <string_view>
 #include <vector>
 
+#include "campaign/CampaignOptions.hpp"  // header-only: config does not link campaign
 #include "config/ConfigError.hpp"
 #include "dem/ElevationMap.hpp"
 #include "dem/OctoMapOptions.hpp"
@@ -45,6 +46,7 @@ struct Config {
   mapper::ServeOptions serve;
   BagConfig bag;
   mosaic::MosaicOptions mosaic;
+  campaign::CampaignOptions campaign;
 };
 
 /// The options a bag is read with: T_body_sensor from its translation and angles, the origin

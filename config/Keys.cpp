@@ -392,6 +392,20 @@ std::vector<KeyEntry> BuildRegistry() {
   mos.Int("min_overlap_cells", &MO::min_overlap_cells, "cells", AtLeast(3),
           "less overlap: the input is placed as it is and flagged");
 
+  using CO = campaign::CampaignOptions;
+  SectionKeys<CO> cam(keys, "campaign", &Config::campaign);
+  cam.Int("cpus_per_task", &CO::cpus_per_task, "cores", AtLeast(1),
+          "per replay task (sbatch --cpus-per-task; also sets how many run at once with --local)");
+  cam.Int("memory_mb", &CO::memory_mb, "MB", AtLeast(64), "per replay task (sbatch --mem)");
+  cam.Int("time_limit_min", &CO::time_limit_min, "min", AtLeast(0),
+          "per task (sbatch --time); 0 = the partition's limit");
+  cam.Text("partition", &CO::partition, "sbatch --partition; \"\" = the cluster's default");
+  cam.Text("account", &CO::account, "sbatch --account; \"\" = the user's default");
+  cam.Int("mosaic_tasks", &CO::mosaic_tasks, "tasks", AtLeast(1),
+          "array tasks fusing the mosaic, each a band of rows of tiles");
+  cam.Int("mosaic_memory_mb", &CO::mosaic_memory_mb, "MB", AtLeast(64),
+          "per mosaic task (co-registration, a band of tiles, the assembly)");
+
   return keys;
 }
 

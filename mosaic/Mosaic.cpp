@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -240,89 +241,352 @@ void TranslateToCog(const fs::path& staging, const fs::path& cog, const fs::path
   }
 }
 
-}  // namespace
+// GDAL as every step uses it: its block cache bounded (when the user set none) and its errors
+// kept for our messages rather than printed.
+class GdalScope {
+ public:
+  GdalScope() {
+    if (CPLGetConfigOption("GDAL_CACHEMAX", nullptr) == nullptr) GDALSetCacheMax64(kCacheBytes);
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+  }
+  ~GdalScope() { CPLPopErrorHandler(); }
+  GdalScope(const GdalScope&) = delete;
+  GdalScope& operator=(const GdalScope&) = delete;
+};
 
-MosaicResult BuildMosaic(const std::vector<fs::path>& files, const fs::path& out,
-                         const fs::path& report, const MosaicOptions& options,
-                         const registration::RegistrationOptions& registration) {
+// The inputs opened, checked and placed on the common grid, with their datum offsets: where
+// every step starts, before any output exists.
+struct Placed {
+  std::vector<Input> inputs;
+  OutputGrid grid;
+};
+
+Placed Place(const std::vector<fs::path>& files, const MosaicOptions& options) {
   CheckOptions(options);
   if (files.empty()) throw std::invalid_argument("mosaic: no input DEM");
-  if (CPLGetConfigOption("GDAL_CACHEMAX", nullptr) == nullptr) GDALSetCacheMax64(kCacheBytes);
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  struct PopHandler {
-    ~PopHandler() { CPLPopErrorHandler(); }
-  } pop_handler;
-
-  // Open, check and place every input before any output exists.
-  std::vector<Input> inputs;
-  for (const fs::path& file : files) inputs.push_back(detail::OpenInput(file));
+  Placed placed;
+  for (const fs::path& file : files) placed.inputs.push_back(detail::OpenInput(file));
+  std::vector<Input>& inputs = placed.inputs;
   const OGRSpatialReference srs = OutputSrs(options, inputs.front());
   for (Input& input : inputs) detail::LocateInput(&input, srs);
-  const OutputGrid grid = MakeGrid(inputs, srs, options);
+  placed.grid = MakeGrid(inputs, srs, options);
   for (Input& input : inputs) {
     detail::Correction datum;
     datum.datum_offset_m = input.datum_altitude_m - inputs.front().datum_altitude_m;
-    detail::SetCorrection(&input, grid.srs, datum);
+    detail::SetCorrection(&input, placed.grid.srs, datum);
   }
+  return placed;
+}
 
+MosaicResult GridResult(const OutputGrid& grid) {
   MosaicResult result;
   result.width = grid.width;
   result.height = grid.height;
   result.geotransform = grid.geotransform;
   result.wkt = grid.wkt;
   result.cell_size_m = grid.cell_size_m();
+  return result;
+}
+
+// Co-registers the placed inputs in order (each onto the mosaic of those before it).
+MosaicPlan Plan(const std::vector<fs::path>& files, Placed* placed, const MosaicOptions& options,
+                const registration::RegistrationOptions& registration) {
+  std::vector<Input>& inputs = placed->inputs;
+  MosaicPlan plan;
+  plan.files = files;
+  plan.result = GridResult(placed->grid);
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     InputReport entry;
     entry.file = inputs[i].file.string();
     entry.reference = i == 0;
     entry.status = i == 0 ? "reference" : "off";
     if (i > 0 && options.coregister) {
-      entry = detail::Coregister(inputs, i, grid, options, registration);
+      entry = detail::Coregister(inputs, i, placed->grid, options, registration);
     }
-    result.inputs.push_back(entry);
+    plan.result.inputs.push_back(entry);
   }
+  for (const Input& input : inputs) {
+    plan.corrections.push_back(input.correction.T.matrix());
+    plan.correction_origins.push_back(input.correction.origin);
+  }
+  return plan;
+}
 
-  // Fusion, tile by tile: each tile warps only the inputs that reach it.
-  TemporaryFile staging(out, "staging");
-  TemporaryFile cog(out, "tmp");
-  {
-    DatasetPtr staged =
-        CreateStaging(staging.path(), out, grid, inputs.front().datum_text, inputs.size());
-    const int tile = options.tile_cells;
-    for (int row0 = 0; row0 < grid.height; row0 += tile) {
-      for (int col0 = 0; col0 < grid.width; col0 += tile) {
-        const Window window{col0, row0, std::min(tile, grid.width - col0),
-                            std::min(tile, grid.height - row0)};
-        CellFusion fusion(window.cells());
-        for (const Input& input : inputs) {
-          if (detail::Touches(input, grid, window))
-            fusion.Add(detail::WarpInput(input, grid, window));
-        }
-        FusedLayers fused = fusion.Finish(options.disagreement_sigma);
-        result.valid_cells += fused.valid_cells;
-        WriteTile(staged.get(), out, window, fused);
-        ++result.tiles;
+// Fuses the tiles of grid rows [row0, row1) into `staging`, whose first row is grid row `row0`.
+// Each tile warps only the inputs that reach it.
+void FuseRows(const Placed& placed, int row0, int row1, const MosaicOptions& options,
+              GDALDataset* staging, const fs::path& out, MosaicResult* result) {
+  const OutputGrid& grid = placed.grid;
+  const int tile = options.tile_cells;
+  for (int row = row0; row < row1; row += tile) {
+    for (int col0 = 0; col0 < grid.width; col0 += tile) {
+      const Window window{col0, row, std::min(tile, grid.width - col0), std::min(tile, row1 - row)};
+      CellFusion fusion(window.cells());
+      for (const Input& input : placed.inputs) {
+        if (detail::Touches(input, grid, window))
+          fusion.Add(detail::WarpInput(input, grid, window));
       }
+      FusedLayers fused = fusion.Finish(options.disagreement_sigma);
+      result->valid_cells += fused.valid_cells;
+      Window local = window;
+      local.row0 -= row0;
+      WriteTile(staging, out, local, fused);
+      ++result->tiles;
     }
-    CPLErrorReset();
-    GDALDataset* raw = staged.release();
-    GDALClose(GDALDataset::ToHandle(raw));
-    if (CPLGetLastErrorType() >= CE_Failure) FailWrite(out, "cannot finish the staging GeoTIFF");
   }
-  TranslateToCog(staging.path(), cog.path(), out);
+}
+
+// Closes a GeoTIFF being written, with GDAL's last error if flushing it failed.
+void CloseStaging(DatasetPtr staged, const fs::path& out) {
+  CPLErrorReset();
+  GDALDataset* raw = staged.release();
+  GDALClose(GDALDataset::ToHandle(raw));
+  if (CPLGetLastErrorType() >= CE_Failure) FailWrite(out, "cannot finish the staging GeoTIFF");
+}
+
+// The staged grid as the COG `out`, then the report beside it; both atomically.
+void WriteCog(const fs::path& staging, const fs::path& out, const fs::path& report,
+              const MosaicResult& result, const MosaicOptions& options) {
+  TemporaryFile cog(out, "tmp");
+  TranslateToCog(staging, cog.path(), out);
   if (report.empty()) {
     cog.CommitTo(out);
-  } else {
-    const fs::path json = io::WriteTemporaryFile(report, MosaicReportJson(result, options));
-    try {
-      cog.CommitTo(out);
-    } catch (...) {
-      std::error_code ignored;
-      fs::remove(json, ignored);
-      throw;
-    }
-    io::CommitTemporaryFile(json, report);
+    return;
   }
+  const fs::path json = io::WriteTemporaryFile(report, MosaicReportJson(result, options));
+  try {
+    cog.CommitTo(out);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(json, ignored);
+    throw;
+  }
+  io::CommitTemporaryFile(json, report);
+}
+
+// Re-applies the plan's corrections to freshly placed inputs, after checking they are the ones
+// planned. Only corrections co-registration changed are re-applied, so every input ends in the
+// very state PlanMosaic left it in.
+void ApplyPlan(const MosaicPlan& plan, Placed* placed) {
+  const OutputGrid& grid = placed->grid;
+  if (grid.width != plan.result.width || grid.height != plan.result.height ||
+      grid.geotransform != plan.result.geotransform ||
+      plan.corrections.size() != placed->inputs.size() ||
+      plan.correction_origins.size() != placed->inputs.size()) {
+    throw io::IoError(plan.files.front().string() +
+                      ": the inputs are not the ones planned (grid or count changed), or "
+                      "mosaic.crs / mosaic.cell_size_m differ from the plan's");
+  }
+  for (std::size_t i = 0; i < placed->inputs.size(); ++i) {
+    Input& input = placed->inputs[i];
+    if (plan.corrections[i] == Eigen::Matrix4d::Identity() &&
+        plan.correction_origins[i] == Eigen::Vector3d::Zero())
+      continue;
+    detail::Correction correction = input.correction;  // keeps the datum offset
+    correction.T.matrix() = plan.corrections[i];
+    correction.origin = plan.correction_origins[i];
+    detail::SetCorrection(&input, grid.srs, correction);
+  }
+}
+
+// A band of whole grid rows as its own grid (a part's GeoTIFF).
+OutputGrid RowsOf(const OutputGrid& grid, int row0, int row1) {
+  OutputGrid rows = grid;
+  rows.height = row1 - row0;
+  rows.geotransform[3] = grid.geotransform[3] + row0 * grid.geotransform[5];
+  return rows;
+}
+
+std::size_t MetadataCount(GDALDataset* ds, const char* key) {
+  const char* value = ds->GetMetadataItem(key);
+  return value != nullptr ? static_cast<std::size_t>(std::strtoull(value, nullptr, 10)) : 0;
+}
+
+Eigen::Matrix4d MatrixFromJson(const nlohmann::json& j) {
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) m(r, c) = j.at(r).at(c).get<double>();
+  return m;
+}
+
+Eigen::Vector3d VectorFromJson(const nlohmann::json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+}
+
+InputReport InputReportFromJson(const nlohmann::json& j) {
+  InputReport r;
+  r.file = j.at("file").get<std::string>();
+  r.reference = j.at("reference").get<bool>();
+  r.status = j.at("status").get<std::string>();
+  r.overlaps = j.at("overlaps").get<bool>();
+  r.applied = j.at("applied").get<bool>();
+  r.translation_m = VectorFromJson(j.at("translation_m"));
+  r.rotation_deg = VectorFromJson(j.at("rotation_deg"));
+  r.overlap_cells = j.at("overlap_cells").get<std::size_t>();
+  r.inlier_ratio = j.at("inlier_ratio").get<double>();
+  r.iterations = j.at("iterations").get<int>();
+  r.disagreement_before = j.at("disagreement_before").get<std::size_t>();
+  r.disagreement_after = j.at("disagreement_after").get<std::size_t>();
+  r.rms_before_m = j.at("rms_before_m").get<double>();
+  r.rms_after_m = j.at("rms_after_m").get<double>();
+  return r;
+}
+
+constexpr const char* kPlanFormat = "rovermap mosaic plan 1";
+
+}  // namespace
+
+MosaicPlan PlanMosaic(const std::vector<fs::path>& files, const MosaicOptions& options,
+                      const registration::RegistrationOptions& registration) {
+  const GdalScope gdal;
+  Placed placed = Place(files, options);
+  return Plan(files, &placed, options, registration);
+}
+
+MosaicResult BuildMosaic(const std::vector<fs::path>& files, const fs::path& out,
+                         const fs::path& report, const MosaicOptions& options,
+                         const registration::RegistrationOptions& registration) {
+  const GdalScope gdal;
+  Placed placed = Place(files, options);
+  MosaicResult result = Plan(files, &placed, options, registration).result;
+  TemporaryFile staging(out, "staging");
+  DatasetPtr staged = CreateStaging(staging.path(), out, placed.grid,
+                                    placed.inputs.front().datum_text, placed.inputs.size());
+  FuseRows(placed, 0, placed.grid.height, options, staged.get(), out, &result);
+  CloseStaging(std::move(staged), out);
+  WriteCog(staging.path(), out, report, result, options);
+  return result;
+}
+
+std::string MosaicPlanJson(const MosaicPlan& plan) {
+  nlohmann::json files = nlohmann::json::array();
+  for (const fs::path& file : plan.files) files.push_back(file.string());
+  nlohmann::json corrections = nlohmann::json::array();
+  for (std::size_t i = 0; i < plan.corrections.size(); ++i) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) {
+      rows.push_back({plan.corrections[i](r, 0), plan.corrections[i](r, 1),
+                      plan.corrections[i](r, 2), plan.corrections[i](r, 3)});
+    }
+    const Eigen::Vector3d& o = plan.correction_origins[i];
+    corrections.push_back({{"T", rows}, {"origin", {o.x(), o.y(), o.z()}}});
+  }
+  const nlohmann::json out = {{"format", kPlanFormat},
+                              {"files", files},
+                              {"wkt", plan.result.wkt},
+                              {"corrections", corrections},
+                              {"report", nlohmann::json::parse(MosaicReportJson(plan.result, {}))}};
+  return out.dump(1) + "\n";
+}
+
+MosaicPlan ParseMosaicPlan(const std::string& text, const fs::path& file) {
+  MosaicPlan plan;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    if (j.at("format").get<std::string>() != kPlanFormat)
+      throw io::IoError(file.string() + ": not a " + kPlanFormat);
+    for (const auto& f : j.at("files")) plan.files.emplace_back(f.get<std::string>());
+    for (const auto& c : j.at("corrections")) {
+      plan.corrections.push_back(MatrixFromJson(c.at("T")));
+      plan.correction_origins.push_back(VectorFromJson(c.at("origin")));
+    }
+    const nlohmann::json& report = j.at("report");
+    plan.result.width = report.at("width").get<int>();
+    plan.result.height = report.at("height").get<int>();
+    plan.result.cell_size_m = report.at("cell_size_m").get<double>();
+    plan.result.geotransform = report.at("geotransform").get<std::array<double, 6>>();
+    plan.result.wkt = j.at("wkt").get<std::string>();
+    for (const auto& input : report.at("inputs"))
+      plan.result.inputs.push_back(InputReportFromJson(input));
+  } catch (const nlohmann::json::exception& e) {
+    throw io::IoError(file.string() + ": not a mosaic plan (" + e.what() + ")");
+  }
+  if (plan.files.empty() || plan.corrections.size() != plan.files.size() ||
+      plan.result.inputs.size() != plan.files.size()) {
+    throw io::IoError(file.string() +
+                      ": not a mosaic plan (counts of files, corrections and "
+                      "reports differ)");
+  }
+  return plan;
+}
+
+std::pair<int, int> MosaicPartRows(const MosaicPlan& plan, int part, int parts,
+                                   const MosaicOptions& options) {
+  if (parts < 1 || part < 0 || part >= parts)
+    throw std::invalid_argument("mosaic part " + std::to_string(part) + " of " +
+                                std::to_string(parts) + ": not a part");
+  const long tile = options.tile_cells;
+  const long tile_rows = (plan.result.height + tile - 1) / tile;
+  const long first = tile_rows * part / parts;
+  const long last = tile_rows * (part + 1) / parts;
+  return {static_cast<int>(std::min<long>(first * tile, plan.result.height)),
+          static_cast<int>(std::min<long>(last * tile, plan.result.height))};
+}
+
+void FuseMosaicPart(const MosaicPlan& plan, int part, int parts, const fs::path& out,
+                    const MosaicOptions& options) {
+  const auto [row0, row1] = MosaicPartRows(plan, part, parts, options);
+  if (row0 == row1) return;
+  const GdalScope gdal;
+  Placed placed = Place(plan.files, options);
+  ApplyPlan(plan, &placed);
+  MosaicResult counts;
+  TemporaryFile temp(out, "tmp");
+  DatasetPtr staged = CreateStaging(temp.path(), out, RowsOf(placed.grid, row0, row1),
+                                    placed.inputs.front().datum_text, placed.inputs.size());
+  FuseRows(placed, row0, row1, options, staged.get(), out, &counts);
+  staged->SetMetadataItem("MOSAIC_TILES", std::to_string(counts.tiles).c_str());
+  staged->SetMetadataItem("MOSAIC_VALID_CELLS", std::to_string(counts.valid_cells).c_str());
+  CloseStaging(std::move(staged), out);
+  temp.CommitTo(out);
+}
+
+MosaicResult AssembleMosaic(const MosaicPlan& plan, int parts,
+                            const std::function<fs::path(int)>& part_file, const fs::path& out,
+                            const fs::path& report, const MosaicOptions& options) {
+  const GdalScope gdal;
+  Placed placed = Place(plan.files, options);
+  ApplyPlan(plan, &placed);
+  const OutputGrid& grid = placed.grid;
+  MosaicResult result = plan.result;
+  TemporaryFile staging(out, "staging");
+  DatasetPtr staged = CreateStaging(staging.path(), out, grid, placed.inputs.front().datum_text,
+                                    placed.inputs.size());
+  std::vector<float> buffer;
+  for (int part = 0; part < parts; ++part) {
+    const auto [row0, row1] = MosaicPartRows(plan, part, parts, options);
+    if (row0 == row1) continue;
+    const fs::path file = part_file(part);
+    DatasetPtr ds(GDALDataset::Open(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
+    if (!ds) throw io::IoError(file.string() + ": missing or not a GeoTIFF (mosaic part)");
+    if (ds->GetRasterXSize() != grid.width || ds->GetRasterYSize() != row1 - row0 ||
+        ds->GetRasterCount() != 4) {
+      throw io::IoError(file.string() + ": not part " + std::to_string(part) + " of " +
+                        std::to_string(parts) + " of this plan (size or bands differ)");
+    }
+    result.tiles += static_cast<int>(MetadataCount(ds.get(), "MOSAIC_TILES"));
+    result.valid_cells += MetadataCount(ds.get(), "MOSAIC_VALID_CELLS");
+    // A band of tile rows at a time: memory bounded by a tile row, not the part.
+    const int chunk = options.tile_cells;
+    for (int row = row0; row < row1; row += chunk) {
+      const int rows = std::min(chunk, row1 - row);
+      buffer.resize(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(rows));
+      for (int b = 1; b <= 4; ++b) {
+        if (ds->GetRasterBand(b)->RasterIO(GF_Read, 0, row - row0, grid.width, rows, buffer.data(),
+                                           grid.width, rows, GDT_Float32, 0, 0,
+                                           nullptr) != CE_None) {
+          throw io::IoError(file.string() + ": cannot read it (mosaic part)");
+        }
+        if (staged->GetRasterBand(b)->RasterIO(GF_Write, 0, row, grid.width, rows, buffer.data(),
+                                               grid.width, rows, GDT_Float32, 0, 0,
+                                               nullptr) != CE_None) {
+          FailWrite(out, "cannot write a tile");
+        }
+      }
+    }
+  }
+  CloseStaging(std::move(staged), out);
+  WriteCog(staging.path(), out, report, result, options);
   return result;
 }
 

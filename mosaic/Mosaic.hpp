@@ -7,7 +7,9 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mosaic/MosaicOptions.hpp"
@@ -68,5 +70,49 @@ MosaicResult BuildMosaic(const std::vector<std::filesystem::path>& inputs,
 
 /// The report as JSON text (mosaic.json).
 std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& options);
+
+// The same mosaic in three steps, for a campaign that runs them as separate jobs (apps/Campaign):
+// PlanMosaic (sequential: co-registration), FuseMosaicPart for each of `parts` bands of tile rows
+// (independent), AssembleMosaic (the parts into the COG). The COG is the one BuildMosaic writes.
+
+/// Step 1's outcome: the inputs, what co-registration found and reported, and the grid.
+struct MosaicPlan {
+  std::vector<std::filesystem::path> files;
+  MosaicResult result;  ///< grid and per-input reports; tiles and valid_cells are 0 here
+  /// Per input, the rigid correction p' = origin + T·(p − origin) in the output CRS [m].
+  std::vector<Eigen::Matrix4d> corrections;
+  std::vector<Eigen::Vector3d> correction_origins;
+};
+
+/// Opens and places the inputs, makes the grid, co-registers (when options.coregister).
+/// @throw as BuildMosaic.
+MosaicPlan PlanMosaic(const std::vector<std::filesystem::path>& inputs,
+                      const MosaicOptions& options,
+                      const registration::RegistrationOptions& registration);
+
+/// The plan as JSON text (doubles round-trip exactly), and back.
+/// @throw io::IoError naming `file` if the text is not a plan.
+std::string MosaicPlanJson(const MosaicPlan& plan);
+MosaicPlan ParseMosaicPlan(const std::string& text, const std::filesystem::path& file);
+
+/// The rows of cells [first, second) of part `part` of `parts`: whole rows of tiles, as evenly
+/// as they go (empty when there are more parts than rows of tiles).
+std::pair<int, int> MosaicPartRows(const MosaicPlan& plan, int part, int parts,
+                                   const MosaicOptions& options);
+
+/// Step 2: fuses the rows of part `part` into the GeoTIFF `out` (atomically; nothing is written
+/// for an empty part). Reopens the inputs, which must be the ones planned.
+/// @throw io::IoError naming the file if an input changed since the plan or `out` cannot be
+///        written; std::invalid_argument if `part` is not in [0, parts).
+void FuseMosaicPart(const MosaicPlan& plan, int part, int parts, const std::filesystem::path& out,
+                    const MosaicOptions& options);
+
+/// Step 3: the parts (every non-empty part of `parts`, written by FuseMosaicPart into
+/// `part_file(p)`) into the COG `out` and the report, as BuildMosaic.
+/// @throw io::IoError naming a missing or unreadable part, or `out` if it cannot be written.
+MosaicResult AssembleMosaic(const MosaicPlan& plan, int parts,
+                            const std::function<std::filesystem::path(int)>& part_file,
+                            const std::filesystem::path& out, const std::filesystem::path& report,
+                            const MosaicOptions& options);
 
 }  // namespace rovermap::mosaic

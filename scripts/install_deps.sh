@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
   clang libclang-rt-14-dev libomp-dev
+  slurmctld slurmd slurm-client munge
 )
 if [[ "${ROVERMAP_BENCH_PEERS:-OFF}" == "ON" ]]; then
   packages+=(libpcl-dev libopen3d-dev)
