@@ -1,5 +1,9 @@
 // `rovermap mosaic DEM.tif ... --out MOSAIC.tif`: dem.tif files fused into one COG on a common
 // grid, with mosaic.json beside it; a thin layer over mosaic/.
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <stdexcept>
@@ -7,6 +11,7 @@
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "io/IoError.hpp"
 #include "mosaic/Mosaic.hpp"
 
 namespace rovermap::apps {
@@ -14,13 +19,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// --out's folder must exist; the file (and mosaic.json beside it) only with --force.
+// --out's folder must exist and be writable (checked before any work); the file (and
+// mosaic.json beside it) may exist only with --force.
 void CheckOutputFile(const fs::path& out, const fs::path& report, bool force) {
   std::error_code error;
   if (fs::is_directory(out, error)) throw UsageError("--out " + out.string() + ": a directory");
   const fs::path parent = out.parent_path().empty() ? fs::path(".") : out.parent_path();
   if (!fs::is_directory(parent, error)) {
     throw UsageError("--out " + out.string() + ": no folder " + parent.string());
+  }
+  if (::access(parent.c_str(), W_OK | X_OK) != 0) {
+    throw io::IoError("--out " + out.string() + ": cannot write in " + parent.string() + " (" +
+                      std::strerror(errno) + ")");
   }
   for (const fs::path& file : {out, report}) {
     if (fs::exists(file, error) && !force) {

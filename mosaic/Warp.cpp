@@ -119,8 +119,14 @@ Input OpenInput(const fs::path& file) {
   RegisterGdal();
   CPLErrorReset();
   std::error_code error;
-  if (!fs::exists(file, error)) throw io::IoError(file.string() + ": no such file");
-  if (fs::is_directory(file, error)) throw io::IoError(file.string() + ": a directory, not a DEM");
+  const fs::file_status status = fs::status(file, error);
+  if (status.type() == fs::file_type::not_found)
+    throw io::IoError(file.string() + ": no such file");
+  // Not "no such file": it may be there, in a directory we may not enter.
+  if (error) throw io::IoError(file.string() + ": cannot access (" + error.message() + ")");
+  if (fs::is_directory(status)) throw io::IoError(file.string() + ": a directory, not a DEM");
+  if (fs::is_regular_file(status) && fs::file_size(file, error) == 0)
+    throw io::IoError(file.string() + ": empty file");
   const char* const drivers[] = {"GTiff", "COG", nullptr};
   Input input;
   input.file = file;

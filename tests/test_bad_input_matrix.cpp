@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,17 +14,22 @@
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "tests/support/DemWriting.hpp"
 #include "tests/support/ServeFixture.hpp"
 
 namespace fs = std::filesystem;
 using rovermap::testing::CommandResult;
+using rovermap::testing::Constant;
 using rovermap::testing::DataLines;
+using rovermap::testing::NorthUp;
 using rovermap::testing::Slurp;
+using rovermap::testing::WriteDem;
 
 namespace {
 
@@ -33,6 +39,7 @@ const fs::path kTinyStereo = kData / "sim_tiny_stereo";  // 3 stereo pairs, 480x
 const fs::path kBunny045 = kData / "stanford_bunny" / "bun045.ply";
 const fs::path kBunny000 = kData / "stanford_bunny" / "bun000.ply";
 const fs::path kPng = kTinyStereo / "frames" / "000000.left.png";
+const fs::path kTerrain = kTinyCloud / "terrain.tif";  // a DEM GeoTIFF, 12 m square, UTM 32N
 const std::vector<std::string> kReplayOutputs = {"dem.tif",      "map.bt",    "trajectory.tum",
                                                  "odometry.tum", "drift.csv", "summary.json",
                                                  "dem.png",      "drift.png"};
@@ -83,21 +90,30 @@ bool Has(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-// chmod 000 for the scope of a row.
-class Unreadable {
+// chmod 000 for the scope of a row; `read_only`: chmod 555, a directory that may be listed and
+// entered but not written.
+class Locked {
  public:
-  explicit Unreadable(fs::path p) : p_(std::move(p)) { fs::permissions(p_, fs::perms::none); }
-  ~Unreadable() {
+  explicit Locked(fs::path p, bool read_only = false)
+      : p_(std::move(p)), denied_(read_only ? W_OK : R_OK) {
+    const fs::perms write =
+        fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;
+    fs::permissions(p_, read_only ? fs::perms::all & ~write : fs::perms::none);
+  }
+  ~Locked() {
     std::error_code ec;
     fs::permissions(p_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec, ec);
   }
-  Unreadable(const Unreadable&) = delete;
-  Unreadable& operator=(const Unreadable&) = delete;
-  bool Denies() const { return ::access(p_.c_str(), R_OK) != 0; }
+  Locked(const Locked&) = delete;
+  Locked& operator=(const Locked&) = delete;
+  bool Denies() const { return ::access(p_.c_str(), denied_) != 0; }
   const fs::path& path() const { return p_; }
+  /// test(1)'s operator for the access denied.
+  const char* TestOperator() const { return denied_ == W_OK ? "-w" : "-r"; }
 
  private:
   fs::path p_;
+  int denied_;  ///< R_OK or W_OK
 };
 
 // As root, chmod 000 denies nothing: the row then runs rovermap as nobody (setpriv, from
@@ -108,8 +124,9 @@ class Unreadable {
 
 class BadInput : public rovermap::testing::ServeFixture {
  protected:
-  // True once `locked` cannot be read by the user the commands run as.
-  bool DenyAccess(const Unreadable& locked) {
+  // True once `locked` cannot be read (or written, if read-only) by the user the commands run
+  // as.
+  bool DenyAccess(const Locked& locked) {
     if (locked.Denies()) return true;
     const char* kSetpriv = "/usr/bin/setpriv";
     if (::geteuid() != 0 || ::access(kSetpriv, X_OK) != 0) return false;
@@ -123,8 +140,8 @@ class BadInput : public rovermap::testing::ServeFixture {
     // The locked directory itself (mode 000, owned by nobody now) is not descended into above.
     return ::lchown(locked.path().c_str(), kNobody, kNobody) == 0 &&
            Rovermap("--help").status == 0 &&
-           std::system(("/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups test -r " +
-                        locked.path().string())
+           std::system(("/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups test " +
+                        std::string(locked.TestOperator()) + " " + locked.path().string())
                            .c_str()) != 0;
   }
 
@@ -206,6 +223,42 @@ class BadInput : public rovermap::testing::ServeFixture {
     EXPECT_EQ(DataLines(out / "trajectory.tum").size(), poses);
     ExpectNoTemporaries(out);
     return log;
+  }
+
+  // The folder the mosaic rows write into (created empty: whatever is left in it shows).
+  fs::path MosaicFolder() {
+    fs::create_directories(dir_ / "mosaic");
+    return dir_ / "mosaic";
+  }
+
+  // `rovermap mosaic INPUTS --out MOSAIC/m.tif EXTRA`.
+  CommandResult Mosaic(const std::string& inputs, const std::string& extra = "") {
+    return Rovermap("mosaic " + inputs + " --out " + (MosaicFolder() / "m.tif").string() + " " +
+                    extra);
+  }
+
+  // A refused mosaic: no JSON on stdout; in MOSAIC nothing but the `allowed` names (no COG, no
+  // mosaic.json, no temporary).
+  void ExpectNoMosaic(const CommandResult& r, const std::set<std::string>& allowed = {}) {
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    ExpectNoOutput(MosaicFolder(), allowed);
+  }
+
+  // `rovermap mosaic dem.tif --set SET`: exit 2 naming the key in `message`, nothing written.
+  void ExpectMosaicConfigError(const std::string& set, const std::string& message) {
+    const CommandResult r = Mosaic(Copy(kTerrain, "dem.tif").string(), "--set " + set);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_TRUE(Has(r.err, message)) << r.err;
+    ExpectNoMosaic(r);
+  }
+
+  // An 8 x 8 cell GeoTIFF in UTM 32N (with `crs` "", none; without `geotransform`, none).
+  fs::path SmallDem(const std::string& name, int bands, bool geotransform,
+                    const std::string& crs = "EPSG:32632") {
+    const std::optional<std::array<double, 6>> g =
+        geotransform ? std::optional(NorthUp(313360, 5154600, 1.0)) : std::nullopt;
+    WriteDem(dir_ / name, 8, 8, g, crs, Constant(1.0f, 0.05f, 1.0f), bands);
+    return dir_ / name;
   }
 
   // serve that must stop at start with `status`, naming `expect`; OUT holds at most its lock.
@@ -306,7 +359,7 @@ TEST_F(BadInput, Register_UnreadableDirectory) {
   const fs::path locked = dir_ / "locked";
   fs::create_directories(locked);
   fs::copy_file(kBunny045, locked / "bun045.ply");
-  const Unreadable guard(locked);
+  const Locked guard(locked);
   DENY_OR_SKIP(guard);
   const CommandResult r =
       Rovermap("register " + (locked / "bun045.ply").string() + " " + kBunny000.string());
@@ -385,7 +438,7 @@ TEST_F(BadInput, Simulate_UnreadableConfigDirectory) {
   const fs::path locked = dir_ / "locked";
   fs::create_directories(locked);
   Put(locked / "sim.yaml", "sim:\n  frames: 2\n");
-  const Unreadable guard(locked);
+  const Locked guard(locked);
   DENY_OR_SKIP(guard);
   const fs::path out = dir_ / "sim";
   const CommandResult r =
@@ -583,7 +636,7 @@ TEST_F(BadInput, Replay_MismatchedGroundtruth) {
 
 TEST_F(BadInput, Replay_UnreadableSequenceDirectory) {
   const fs::path seq = Copy(kTinyCloud, "seq");
-  const Unreadable guard(seq);
+  const Locked guard(seq);
   DENY_OR_SKIP(guard);
   const CommandResult r = Replay(seq);
   EXPECT_EQ(r.status, 1);
@@ -594,7 +647,7 @@ TEST_F(BadInput, Replay_UnreadableSequenceDirectory) {
 
 TEST_F(BadInput, Replay_UnreadableFramesDirectory) {
   const fs::path seq = Copy(kTinyCloud, "seq");
-  const Unreadable guard(seq / "frames");
+  const Locked guard(seq / "frames");
   DENY_OR_SKIP(guard);
   const CommandResult r = Replay(seq);
   EXPECT_EQ(r.status, 1);
@@ -691,7 +744,7 @@ TEST_F(BadInput, Serve_OdometryWithTwoLines) {
 
 TEST_F(BadInput, Serve_UnreadableFramesDirectory) {
   const fs::path inbox = MakeInbox(kTinyCloud, 2, "inbox");
-  const Unreadable guard(inbox / "frames");
+  const Locked guard(inbox / "frames");
   DENY_OR_SKIP(guard);
   const fs::path out = dir_ / "out";
   const pid_t pid = Start(inbox, out, "log");
@@ -810,7 +863,7 @@ TEST_F(BadInput, Eval_UnreadableDirectory) {
   const fs::path locked = dir_ / "locked";
   fs::create_directories(locked);
   fs::copy_file(kTinyCloud / "odometry.tum", locked / "estimate.tum");
-  const Unreadable guard(locked);
+  const Locked guard(locked);
   DENY_OR_SKIP(guard);
   const CommandResult r = Eval(locked / "estimate.tum");
   EXPECT_EQ(r.status, 1);
@@ -852,4 +905,151 @@ TEST_F(BadInput, Eval_DemOtherCrs) {
   EXPECT_TRUE(Has(r.err, "zone33/terrain.tif has 'WGS 84 / UTM zone 33N'")) << r.err;
   EXPECT_TRUE(Has(r.err, "UTM zone 32N")) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["status"], "crs_mismatch");
+}
+
+// ---------------------------------------------------------------------------------------------
+// mosaic DEM.tif ... --out MOSAIC.tif: every input and --out are checked before any output; on
+// any failure MOSAIC holds neither the COG nor mosaic.json nor a temporary.
+
+TEST_F(BadInput, Mosaic_MissingFile) {
+  const fs::path dem = Copy(kTerrain, "dem.tif");
+  const CommandResult r = Mosaic(dem.string() + " " + (dir_ / "nowhere.tif").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "nowhere.tif: no such file")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_EmptyFile) {
+  Put(dir_ / "empty.tif", "");
+  const CommandResult r = Mosaic((dir_ / "empty.tif").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "empty.tif: empty file")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_WrongFormat) {
+  const fs::path image = Copy(kPng, "image.tif");  // a PNG named .tif
+  const CommandResult r = Mosaic(image.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "image.tif: not a GeoTIFF")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+// The header is whole, the tiles are not: it fails while fusing, with the temporaries made.
+TEST_F(BadInput, Mosaic_TruncatedGeoTiff) {
+  const fs::path dem = Copy(kTerrain, "cut.tif");
+  KeepBytes(dem, fs::file_size(dem) / 2);
+  const CommandResult r = Mosaic(dem.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "cut.tif: GDAL's warper failed")) << r.err;
+  EXPECT_TRUE(Has(r.err, "band 1")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_OneBand) {
+  const fs::path dem = SmallDem("one_band.tif", 1, true);
+  const CommandResult r = Mosaic(dem.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "one_band.tif: has 1 band(s); a DEM has 3")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_NoGeotransform) {
+  const fs::path dem = SmallDem("no_geotransform.tif", 3, false);
+  const CommandResult r = Mosaic(Copy(kTerrain, "dem.tif").string() + " " + dem.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "no_geotransform.tif: has no geotransform")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_NoCrs) {
+  const fs::path dem = SmallDem("no_crs.tif", 3, true, "");
+  const CommandResult r = Mosaic(Copy(kTerrain, "dem.tif").string() + " " + dem.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "no_crs.tif: has no CRS")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+// A first input in degrees (WGS 84): its CRS would be the mosaic's, whose cells are metres.
+TEST_F(BadInput, Mosaic_WrongUnitsInput) {
+  WriteDem(dir_ / "degrees.tif", 8, 8, NorthUp(6.57, 46.52, 1e-5), "EPSG:4326",
+           Constant(1.0f, 0.05f, 1.0f));
+  const CommandResult r =
+      Mosaic((dir_ / "degrees.tif").string() + " " + Copy(kTerrain, "dem.tif").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(Has(r.err, "degrees.tif: its CRS is not projected")) << r.err;
+  EXPECT_TRUE(Has(r.err, "set mosaic.crs")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_NonFiniteValue) {
+  ExpectMosaicConfigError("mosaic.disagreement_sigma=nan",
+                          "mosaic.disagreement_sigma: must be finite (got nan)");
+}
+
+TEST_F(BadInput, Mosaic_NegativeCellSize) {
+  ExpectMosaicConfigError("mosaic.cell_size_m=-1", "mosaic.cell_size_m: must be >= 0 (got -1)");
+}
+
+TEST_F(BadInput, Mosaic_ZeroTileCells) {
+  ExpectMosaicConfigError("mosaic.tile_cells=0", "mosaic.tile_cells: must be >= 16 (got 0)");
+}
+
+TEST_F(BadInput, Mosaic_UnknownConfigKey) {
+  ExpectMosaicConfigError("mosaic.cell_size=0.5",
+                          "mosaic.cell_size: unknown key (did you mean mosaic.cell_size_m?)");
+}
+
+// A geographic output CRS: cells of degrees, not metres.
+TEST_F(BadInput, Mosaic_WrongUnitsCrs) {
+  ExpectMosaicConfigError("mosaic.crs=EPSG:4326",
+                          "mosaic.crs: must be a projected CRS (got 'EPSG:4326')");
+}
+
+TEST_F(BadInput, Mosaic_UnreadableDirectory) {
+  const fs::path locked = dir_ / "locked";
+  fs::create_directories(locked);
+  fs::copy_file(kTerrain, locked / "dem.tif");
+  MosaicFolder();  // handed over to nobody with the rest
+  const Locked guard(locked);
+  DENY_OR_SKIP(guard);
+  const CommandResult r = Mosaic((locked / "dem.tif").string());
+  EXPECT_EQ(r.status, 1);
+  // Not "no such file": it is there, behind a directory we may not enter.
+  EXPECT_TRUE(Has(r.err, "locked/dem.tif: cannot access (Permission denied)")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_OutputFolderMissing) {
+  const fs::path out = dir_ / "nowhere" / "m.tif";
+  const CommandResult r =
+      Rovermap("mosaic " + Copy(kTerrain, "dem.tif").string() + " --out " + out.string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(Has(r.err, "--out " + out.string() + ": no folder")) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "nowhere"));
+}
+
+TEST_F(BadInput, Mosaic_OutputNotWritable) {
+  const fs::path dem = Copy(kTerrain, "dem.tif");
+  const Locked guard(MosaicFolder(), /*read_only=*/true);
+  DENY_OR_SKIP(guard);
+  const CommandResult r = Mosaic(dem.string());
+  EXPECT_EQ(r.status, 1);
+  // Refused before the inputs are read (it fused them all, then failed).
+  EXPECT_TRUE(Has(r.err, "--out " + (MosaicFolder() / "m.tif").string() + ": cannot write in"))
+      << r.err;
+  EXPECT_TRUE(Has(r.err, "(Permission denied)")) << r.err;
+  ExpectNoMosaic(r);
+}
+
+TEST_F(BadInput, Mosaic_OutputExistsWithoutForce) {
+  Put(MosaicFolder() / "m.tif", "previous mosaic\n");
+  Put(MosaicFolder() / "mosaic.json", "{}\n");
+  const CommandResult r = Mosaic(Copy(kTerrain, "dem.tif").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(Has(r.err, "m.tif exists (use --force to replace it)")) << r.err;
+  ExpectNoMosaic(r, {"m.tif", "mosaic.json"});
+  EXPECT_EQ(Slurp(MosaicFolder() / "m.tif"), "previous mosaic\n");
+  EXPECT_EQ(Slurp(MosaicFolder() / "mosaic.json"), "{}\n");
 }

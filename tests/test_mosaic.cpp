@@ -22,55 +22,22 @@
 #include "mosaic/Mosaic.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/DemDifference.hpp"
+#include "tests/support/DemWriting.hpp"
 
 namespace rovermap {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Cell;
 using testing::CommandFixture;
 using testing::CommandResult;
+using testing::Constant;
+using testing::NorthUp;
 using testing::Slurp;
+using testing::Surface;
+using testing::WriteDem;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-struct Cell {
-  float z;
-  float sigma;
-  float count;
-};
-using Surface = std::function<Cell(double x, double y)>;
-
-// A 3-band Float32 GeoTIFF (DESIGN §6 layout) whose cell centres (x, y) in `crs` hold f(x, y).
-void WriteDem(const fs::path& path, int width, int height, const std::array<double, 6>& g,
-              const std::string& crs, const Surface& f, int bands = 3) {
-  GDALAllRegister();
-  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
-  GDALDataset* ds = driver->Create(path.c_str(), width, height, bands, GDT_Float32, nullptr);
-  ASSERT_NE(ds, nullptr);
-  std::array<double, 6> gt = g;
-  ds->SetGeoTransform(gt.data());
-  OGRSpatialReference srs;
-  srs.SetFromUserInput(crs.c_str());
-  ds->SetSpatialRef(&srs);
-  std::vector<std::vector<float>> data(bands, std::vector<float>(width * height));
-  for (int r = 0; r < height; ++r) {
-    for (int c = 0; c < width; ++c) {
-      const double u = c + 0.5;
-      const double v = r + 0.5;
-      const Cell cell = f(g[0] + u * g[1] + v * g[2], g[3] + u * g[4] + v * g[5]);
-      const float values[3] = {cell.z, cell.sigma, cell.count};
-      for (int b = 0; b < bands; ++b) data[b][r * width + c] = values[b];
-    }
-  }
-  for (int b = 0; b < bands; ++b) {
-    GDALRasterBand* band = ds->GetRasterBand(b + 1);
-    band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-    ASSERT_EQ(band->RasterIO(GF_Write, 0, 0, width, height, data[b].data(), width, height,
-                             GDT_Float32, 0, 0, nullptr),
-              CE_None);
-  }
-  GDALClose(ds);
-}
 
 // (x, y) from one EPSG CRS into another, x easting first.
 std::unique_ptr<OGRCoordinateTransformation> EpsgTransform(int from_epsg, int to_epsg) {
@@ -82,14 +49,6 @@ std::unique_ptr<OGRCoordinateTransformation> EpsgTransform(int from_epsg, int to
   to.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   return std::unique_ptr<OGRCoordinateTransformation>(
       OGRCreateCoordinateTransformation(&from, &to));
-}
-
-std::array<double, 6> NorthUp(double x0, double y0, double cell) {
-  return {x0, cell, 0.0, y0, 0.0, -cell};
-}
-
-Surface Constant(float z, float sigma, float count) {
-  return [=](double, double) { return Cell{z, sigma, count}; };
 }
 
 // A plane: bilinear resampling reproduces it exactly.

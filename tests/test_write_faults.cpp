@@ -363,6 +363,88 @@ TEST_F(ReplayFault, DriftCsv) { ExpectStopsAt("drift.csv"); }
 // GDAL 3.6 did not report the short write: a truncated dem.tif replaced the previous one.
 TEST_F(ReplayFault, DemTif) { ExpectStopsAt("dem.tif"); }
 
+// --- `rovermap mosaic --force` over a previous mosaic: the COG, then mosaic.json. ---
+
+class MosaicFault : public WriteFaults {
+ protected:
+  void SetUp() override {
+    WriteFaults::SetUp();
+    out_ = dir_ / "out";
+    fs::create_directories(out_);
+  }
+
+  // `rovermap mosaic INPUTS --out FOLDER/m.tif --force` (created FOLDER), without
+  // co-registration, files limited to `limit` bytes.
+  static ChildResult Mosaic(const std::vector<fs::path>& inputs, const fs::path& folder,
+                            rlim_t limit = RLIM_INFINITY, const std::string& set = "") {
+    fs::create_directories(folder);
+    std::vector<std::string> args = {"mosaic"};
+    for (const fs::path& input : inputs) args.push_back(input.string());
+    args.insert(args.end(), {"--out", (folder / "m.tif").string(), "--force", "--set",
+                             "mosaic.coregister=false"});
+    if (!set.empty()) args.insert(args.end(), {"--set", set});
+    return RunRovermap(args, limit);
+  }
+
+  // The mosaic of `inputs` over the previous one in OUT, with files limited to `limit` bytes:
+  // status 1 naming `target`; the previous m.tif and mosaic.json byte for byte, nothing else.
+  void ExpectFailsKeepingThePrevious(const std::vector<fs::path>& inputs, rlim_t limit,
+                                     const std::string& target) {
+    const std::string cog = Slurp(out_ / "m.tif");
+    const std::string report = Slurp(out_ / "mosaic.json");
+    ASSERT_FALSE(cog.empty());
+    const ChildResult r = Mosaic(inputs, out_, limit);
+    EXPECT_EQ(r.status, 1) << r.message;
+    EXPECT_NE(r.message.find((out_ / target).string()), std::string::npos) << r.message;
+    EXPECT_TRUE(Same("m.tif", Slurp(out_ / "m.tif"), cog));
+    EXPECT_TRUE(Same("mosaic.json", Slurp(out_ / "mosaic.json"), report));
+    std::vector<std::string> left;  // the temporaries are .m.tif.staging-*, .m.tif.tmp-*, ...
+    for (const auto& entry : fs::directory_iterator(out_))
+      left.push_back(entry.path().filename().string());
+    std::sort(left.begin(), left.end());
+    EXPECT_EQ(left, (std::vector<std::string>{"m.tif", "mosaic.json"}));
+    last_message_ = r.message;
+  }
+
+  fs::path out_;
+  std::string last_message_;
+};
+
+// The previous mosaic is of one terrain, the new one of two; the limit falls in the staging
+// GeoTIFF the tiles go into (half the COG), then in the COG itself (all but its last byte).
+TEST_F(MosaicFault, CogFullKeepsThePreviousMosaic) {
+  const std::vector<fs::path> inputs = {kTinyCloud / "terrain.tif", kTinyStereo / "terrain.tif"};
+  ASSERT_EQ(Mosaic({inputs[0]}, out_).status, 0);
+  const ChildResult reference = Mosaic(inputs, dir_ / "reference");
+  ASSERT_EQ(reference.status, 0) << reference.message;
+  const rlim_t size = fs::file_size(dir_ / "reference" / "m.tif");
+  ExpectFailsKeepingThePrevious(inputs, size / 2, "m.tif");
+  EXPECT_NE(last_message_.find("staging GeoTIFF"), std::string::npos) << last_message_;
+  // Measured: the staging GeoTIFF (256-cell tiles, no overviews) is the smaller file.
+  ExpectFailsKeepingThePrevious(inputs, size - 1, "m.tif");
+  EXPECT_NE(last_message_.find("cannot write the COG"), std::string::npos) << last_message_;
+}
+
+// The COG is renamed into place only once mosaic.json is written: a full disk on mosaic.json
+// keeps the previous COG too. A report outgrows its COG with many inputs: the previous mosaic
+// is of 23 small DEMs, the new one of 24 (a longer report, the COG of the same size).
+TEST_F(MosaicFault, ReportFullKeepsThePreviousMosaicAndReport) {
+  ASSERT_EQ(
+      Mosaic({kTinyCloud / "terrain.tif"}, dir_ / "small", RLIM_INFINITY, "mosaic.cell_size_m=3")
+          .status,
+      0);
+  std::vector<fs::path> inputs;
+  for (int k = 0; k < 24; ++k) {
+    inputs.push_back(dir_ / ("dem" + std::to_string(k) + ".tif"));
+    fs::copy_file(dir_ / "small" / "m.tif", inputs.back());
+  }
+  ASSERT_EQ(Mosaic({inputs.begin(), inputs.end() - 1}, out_).status, 0);
+  const rlim_t cog = fs::file_size(out_ / "m.tif");
+  const rlim_t report = fs::file_size(out_ / "mosaic.json");
+  ASSERT_LT(cog, report) << "the limit must fall on mosaic.json, not on the COG";
+  ExpectFailsKeepingThePrevious(inputs, (cog + report) / 2, "mosaic.json");
+}
+
 // --- `rovermap serve`: it stops, exit 1 naming the file (README, serve); a restart loses
 // nothing. ---
 
