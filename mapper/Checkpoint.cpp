@@ -354,7 +354,7 @@ struct CheckpointAccess {
       std::vector<ChainStep> steps;
       steps.reserve(m->results_.size());
       for (const FrameResult& f : m->results_) steps.push_back(f.step);
-      m->chain_ = std::make_unique<PoseChain>(std::move(steps));
+      m->chain_ = std::make_unique<PoseChain>(steps);
     }
     m->attitude_.RestoreVariance(r->Get<double>());
     const bool has_reference = r->Get<std::uint8_t>() != 0;

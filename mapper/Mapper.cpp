@@ -271,7 +271,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   }
   out.status = FrameStatus::kFallback;
   const ChainStep& last = chain_->back();
-  const Eigen::Isometry3d T_world_ref = chain_->steps()[*reference_index_].T_world_body;
+  const Eigen::Isometry3d T_world_ref = results_[*reference_index_].step.T_world_body;
   // 2. Predict: dead reckoning's increment applied to the last chained pose, seen from the
   // reference frame (the last good frame; the same as the last frame unless it was bad).
   const Eigen::Isometry3d T_ref_predicted =

@@ -68,34 +68,33 @@ PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
   if (!IsFiniteRigid(T_world_body0_odom)) {
     throw std::invalid_argument("PoseChain: frame 0 odometry pose is not a finite rigid transform");
   }
-  ChainStep first;
-  first.T_world_body = T_world_body0_odom;
-  first.T_world_body_odom = T_world_body0_odom;
-  steps_.push_back(first);
+  last_.T_world_body = T_world_body0_odom;
+  last_.T_world_body_odom = T_world_body0_odom;
 }
 
-PoseChain::PoseChain(std::vector<ChainStep> steps) : steps_(std::move(steps)) {
-  if (steps_.empty()) throw std::invalid_argument("PoseChain: no steps to restore");
-  for (const ChainStep& step : steps_) {
+PoseChain::PoseChain(const std::vector<ChainStep>& steps) {
+  if (steps.empty()) throw std::invalid_argument("PoseChain: no steps to restore");
+  for (const ChainStep& step : steps) {
     path_length_m_ += step.used_increment.translation().norm();
     if (step.fallback) ++fallbacks_;
   }
+  last_ = steps.back();
 }
 
 Eigen::Isometry3d PoseChain::PredictIncrement(const Eigen::Isometry3d& T_world_body_odom) const {
-  return steps_.back().T_world_body_odom.inverse() * T_world_body_odom;
+  return last_.T_world_body_odom.inverse() * T_world_body_odom;
 }
 
 ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
                          const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
                          const Matrix6d& increment_covariance) {
   if (!IsFiniteRigid(T_world_body_odom)) {
-    throw std::invalid_argument("PoseChain: frame " + std::to_string(steps_.size()) +
+    throw std::invalid_argument("PoseChain: frame " + std::to_string(size()) +
                                 " odometry pose is not a finite rigid transform");
   }
-  const ChainStep& prev = steps_.back();
+  const ChainStep& prev = last_;
   ChainStep step;
-  step.index = steps_.size();
+  step.index = size();
   step.T_world_body_odom = T_world_body_odom;
   step.odom_increment = PredictIncrement(T_world_body_odom);
   step.fallback = !T_prev_curr_registered || !IsFiniteRigid(*T_prev_curr_registered);
@@ -115,7 +114,7 @@ ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
 
   path_length_m_ += step.used_increment.translation().norm();
   if (step.fallback) ++fallbacks_;
-  steps_.push_back(step);
+  last_ = step;
   return step;
 }
 

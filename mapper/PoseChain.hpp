@@ -76,15 +76,18 @@ struct ChainStep {
 
 /// Chains increments from the first dead-reckoning pose. The chain starts where dead
 /// reckoning starts (frame 0: zero correction), so registration only corrects the motion.
+/// It keeps only its last step (what the next one is chained from) and running counters, so
+/// its memory does not grow with the frames; Add returns each step for the caller to keep
+/// (the mapper keeps it in the frame's result, once).
 class PoseChain {
  public:
   /// Starts the chain at frame 0 with T_world_body = `T_world_body0_odom`.
   /// @throw std::invalid_argument if `T_world_body0_odom` is not IsFiniteRigid.
   explicit PoseChain(const Eigen::Isometry3d& T_world_body0_odom);
 
-  /// A chain as saved (mapper/Checkpoint): `steps` as steps() gave them, frame 0 first; the
+  /// A chain as saved (mapper/Checkpoint): every step Add returned, frame 0 first; the
   /// counters are recomputed as Add kept them. @throw std::invalid_argument if `steps` is empty.
-  explicit PoseChain(std::vector<ChainStep> steps);
+  explicit PoseChain(const std::vector<ChainStep>& steps);
 
   /// Dead-reckoning increment from the last frame to a frame at `T_world_body_odom`: the
   /// registration seed T_prev_curr. Never fails (non-finite input gives non-finite output).
@@ -95,24 +98,24 @@ class PoseChain {
   /// `fallback`) when it is nullopt or not IsFiniteRigid. `increment_covariance` is the used
   /// increment's, for a left perturbation in the frame k−1 (RegistrationResult's convention);
   /// it is propagated into the step's `covariance`.
-  /// @return the new step (also kept in steps()).
+  /// @return the new step (now back()).
   /// @throw std::invalid_argument if `T_world_body_odom` is not IsFiniteRigid; the chain is
   ///        then unchanged.
   ChainStep Add(const Eigen::Isometry3d& T_world_body_odom,
                 const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
                 const Matrix6d& increment_covariance = Matrix6d::Zero());
 
-  /// Every step so far, frame 0 first; never empty.
-  const std::vector<ChainStep>& steps() const { return steps_; }
-  const ChainStep& back() const { return steps_.back(); }
-  std::size_t size() const { return steps_.size(); }
+  /// The last step (frame 0's at first).
+  const ChainStep& back() const { return last_; }
+  /// Steps so far, frame 0 included [count].
+  std::size_t size() const { return last_.index + 1; }
   /// Steps that used dead reckoning [count].
   std::size_t fallbacks() const { return fallbacks_; }
   /// Travelled distance: Σ ‖translation of used_increment‖ over the steps [m].
   double path_length_m() const { return path_length_m_; }
 
  private:
-  std::vector<ChainStep> steps_;
+  ChainStep last_;
   std::size_t fallbacks_ = 0;
   double path_length_m_ = 0.0;
 };
