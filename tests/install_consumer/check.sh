@@ -52,7 +52,8 @@ for pattern in rovermap_warnings "$source_dir" "$build_dir"; do
 done
 
 step "find_package(rovermap) from an outside project"
-cmake -S "$here" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release \
+# No build type: the consumer's configuration is not the archives' (imported targets fall back).
+cmake -S "$here" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$prefix" \
   -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_CXX_FLAGS="$extra" -DCMAKE_EXE_LINKER_FLAGS="$extra" \
   >"$work/consumer-configure.log" || { cat "$work/consumer-configure.log"; fail "configure"; }
 grep -q -x -F "rovermap_DIR:PATH=$prefix/lib/cmake/rovermap" "$work/consumer/CMakeCache.txt" ||
@@ -66,7 +67,7 @@ export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
 read -r -a cflags <<<"$(pkg-config --cflags rovermap)"
 read -r -a libs <<<"$(pkg-config --libs rovermap)"
 read -r -a extras <<<"$extra"
-"$cxx" -O2 "${extras[@]}" "${cflags[@]}" "$here/main.cpp" -o "$work/consumer_pc" "${libs[@]}" ||
+"$cxx" "${extras[@]}" "${cflags[@]}" "$here/main.cpp" -o "$work/consumer_pc" "${libs[@]}" ||
   fail "compile and link main.cpp with pkg-config's flags"
 "$work/consumer_pc" || fail "the pkg-config-built consumer did not recover the motion"
 # Every archive whole: the Libs line must cover what any object file of any module needs.
