@@ -12,7 +12,6 @@ work=$2
 cxx=$3
 extra=${4:-}
 here=$(cd "$(dirname "$0")" && pwd)
-prefix=$work/prefix
 
 fail() {
   echo "FAIL: $*" >&2
@@ -22,6 +21,8 @@ step() { echo "== $*"; }
 
 rm -rf "$work"
 mkdir -p "$work"
+work=$(cd "$work" && pwd)  # absolute: CMake would read a relative prefix from elsewhere
+prefix=$work/prefix
 
 step "cmake --install $build --prefix $prefix"
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" ||
