@@ -16,7 +16,6 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -40,14 +39,6 @@ using campaign::CampaignPlan;
 using campaign::Step;
 
 constexpr Step kSteps[] = {Step::kReplay, Step::kMosaicPlan, Step::kMosaicPart, Step::kFinish};
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw io::IoError(file.string() + ": cannot read it");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The inputs: the positional ones, then --list's lines (blank lines and # comments skipped).
 std::vector<fs::path> Inputs(const CampaignArgs& args) {
@@ -87,36 +78,43 @@ fs::path ThisExecutable() {
   return self;
 }
 
-// Runs `argv` (PATH searched); its stdout is returned in `out` when given. @return the exit
-// status, 128 + signal if it was killed. @throw io::IoError if it cannot be started.
-int RunProcess(const std::vector<std::string>& argv, std::string* out = nullptr) {
+// Starts `argv` (PATH searched), its stdout on `stdout_fd` when >= 0. @return its pid.
+// @throw io::IoError if it cannot be started.
+pid_t Spawn(const std::vector<std::string>& argv, int stdout_fd = -1) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
-  int pipe_fds[2] = {-1, -1};
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  if (out != nullptr) {
-    if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw io::IoError(argv[0] + ": cannot make a pipe");
-    posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 1);
-  }
+  if (stdout_fd >= 0) posix_spawn_file_actions_adddup2(&actions, stdout_fd, 1);
   pid_t pid = 0;
   const int spawned =
       ::posix_spawnp(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (out != nullptr) ::close(pipe_fds[1]);
-  if (spawned != 0) {
-    if (out != nullptr) ::close(pipe_fds[0]);
-    throw io::IoError(argv[0] + ": cannot run it (" + std::strerror(spawned) + ")");
-  }
-  if (out != nullptr) {
-    char buffer[4096];
-    ssize_t n = 0;
-    while ((n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0 || (n < 0 && errno == EINTR)) {
-      if (n > 0) out->append(buffer, static_cast<std::size_t>(n));
-    }
+  if (spawned != 0) throw io::IoError(argv[0] + ": cannot run it (" + std::strerror(spawned) + ")");
+  return pid;
+}
+
+// Runs `argv` (PATH searched) and returns its stdout in `out`. @return the exit status, 128 +
+// signal if it was killed. @throw io::IoError if it cannot be started.
+int RunProcess(const std::vector<std::string>& argv, std::string* out) {
+  int pipe_fds[2] = {-1, -1};
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw io::IoError(argv[0] + ": cannot make a pipe");
+  pid_t pid = 0;
+  try {
+    pid = Spawn(argv, pipe_fds[1]);
+  } catch (...) {
     ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    throw;
   }
+  ::close(pipe_fds[1]);
+  char buffer[4096];
+  ssize_t n = 0;
+  while ((n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0 || (n < 0 && errno == EINTR)) {
+    if (n > 0) out->append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(pipe_fds[0]);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
@@ -132,7 +130,7 @@ int Finished(const CampaignLayout& layout) {
               << layout.Log(Step::kFinish, 0).string() << ")\n";
     return kExitFailure;
   }
-  const std::string text = ReadText(layout.Summary());
+  const std::string text = io::ReadWholeFile(layout.Summary());
   std::cout << text;
   const nlohmann::json summary = nlohmann::json::parse(text, nullptr, false);
   if (summary.is_object()) {
@@ -152,7 +150,8 @@ int Finished(const CampaignLayout& layout) {
       std::cerr << "rovermap: campaign: no mosaic: " << mosaic.value("error", "") << "\n";
     }
   }
-  const bool all_ok = summary.is_object() && summary.value("failed", nlohmann::json::array()).empty();
+  const bool all_ok =
+      summary.is_object() && summary.value("failed", nlohmann::json::array()).empty();
   return finish.status.exit_status == kExitOk && all_ok ? kExitOk : kExitFailure;
 }
 
@@ -177,17 +176,8 @@ int RunLocally(const CampaignLayout& layout, const CampaignPlan& plan, int repla
     };
     while (done < tasks) {
       while (next < tasks && static_cast<int>(running.size()) < jobs) {
-        const std::vector<std::string> argv = {self, "campaign-task", campaign::ToString(step),
-                                               layout.dir().string(), std::to_string(next)};
-        std::vector<char*> args;
-        for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-        args.push_back(nullptr);
-        pid_t pid = 0;
-        const int spawned =
-            ::posix_spawn(&pid, self.c_str(), nullptr, nullptr, args.data(), environ);
-        if (spawned != 0) {
-          throw io::IoError(self + ": cannot run a campaign task (" + std::strerror(spawned) + ")");
-        }
+        const pid_t pid = Spawn({self, "campaign-task", campaign::ToString(step),
+                                 layout.dir().string(), std::to_string(next)});
         running[pid] = next++;
       }
       int status = 0;
@@ -293,7 +283,7 @@ int RunStep(Step step, const CampaignLayout& layout, const CampaignPlan& plan, i
     }
     case Step::kMosaicPart: {
       const mosaic::MosaicPlan mosaic_plan =
-          mosaic::ParseMosaicPlan(ReadText(layout.MosaicPlan()), layout.MosaicPlan());
+          mosaic::ParseMosaicPlan(io::ReadWholeFile(layout.MosaicPlan()), layout.MosaicPlan());
       mosaic::FuseMosaicPart(mosaic_plan, index, plan.mosaic_tasks, layout.MosaicPart(index),
                              cfg.mosaic);
       return kExitOk;
@@ -302,7 +292,7 @@ int RunStep(Step step, const CampaignLayout& layout, const CampaignPlan& plan, i
       std::string mosaic_error;
       try {
         const mosaic::MosaicPlan mosaic_plan =
-            mosaic::ParseMosaicPlan(ReadText(layout.MosaicPlan()), layout.MosaicPlan());
+            mosaic::ParseMosaicPlan(io::ReadWholeFile(layout.MosaicPlan()), layout.MosaicPlan());
         mosaic::AssembleMosaic(
             mosaic_plan, plan.mosaic_tasks, [&](int part) { return layout.MosaicPart(part); },
             layout.Mosaic(), layout.MosaicReport(), cfg.mosaic);
@@ -407,7 +397,7 @@ int RunCampaignTask(const CampaignTaskArgs& args) {
   const CampaignLayout absolute(fs::absolute(args.dir).lexically_normal());
   const CampaignPlan plan = [&] {
     try {
-      return campaign::ParseCampaignPlan(ReadText(absolute.Plan()), absolute.Plan());
+      return campaign::ParseCampaignPlan(io::ReadWholeFile(absolute.Plan()), absolute.Plan());
     } catch (const std::runtime_error& e) {
       throw io::IoError(e.what());
     }

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
+
+#include "io/FileUtil.hpp"
+#include "io/IoError.hpp"
 
 namespace rovermap::campaign {
 namespace {
@@ -16,20 +18,13 @@ using nlohmann::json;
 
 constexpr const char* kPlanFormat = "rovermap campaign 1";
 
-std::string Slurp(const fs::path& file, bool* found) {
-  std::ifstream in(file, std::ios::binary);
-  *found = static_cast<bool>(in);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// A JSON file, or null when it is missing or unreadable.
+// A JSON file, or null when it is missing, unreadable or not JSON.
 json ReadJson(const fs::path& file) {
-  bool found = false;
-  const std::string text = Slurp(file, &found);
-  if (!found) return nullptr;
-  return json::parse(text, nullptr, /*allow_exceptions=*/false);
+  try {
+    return json::parse(io::ReadWholeFile(file), nullptr, /*allow_exceptions=*/false);
+  } catch (const io::IoError&) {
+    return nullptr;
+  }
 }
 
 // A name that is safe in a path and a shell word: letters, digits, '-', '_' and '.'.
