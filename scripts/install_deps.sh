@@ -11,6 +11,7 @@ packages=(
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
   clang libclang-rt-14-dev libomp-dev
   slurmctld slurmd slurm-client munge
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 if [[ "${ROVERMAP_BENCH_PEERS:-OFF}" == "ON" ]]; then
   packages+=(libpcl-dev libopen3d-dev)

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CTest Install.AnOutsideProjectBuildsAgainstTheInstalledTree: installs the build into a fresh
 # prefix, checks the layout, builds this folder's project against it with find_package(rovermap)
-# and main.cpp again through pkg-config, and runs both (each must recover a known motion).
+# and main.cpp again through pkg-config, and runs both (each must recover a known motion); with
+# the Python module, imports it from the installed tree and registers two curves.
 #
 #   check.sh BUILD_DIR WORK_DIR CXX [EXTRA_FLAGS]
 # EXTRA_FLAGS go to every compile and link (the sanitizers, when the libraries have them).
@@ -76,5 +77,23 @@ echo 'int main() { return 0; }' >"$work/empty_main.cpp"
 "$cxx" "${extras[@]}" "$work/empty_main.cpp" -o "$work/consumer_pc_whole" \
   -Wl,--whole-archive "${libs[@]}" -Wl,--no-whole-archive ||
   fail "link every installed archive whole with pkg-config's Libs"
+
+# The Python module, when the build has it (ROVERMAP_PYTHON): installed beside the libraries and
+# importable from there alone, outside the source and build trees.
+if compgen -G "$build/python/rovermap/_rovermap*.so" >/dev/null; then
+  step "import rovermap from the installed tree"
+  package=$(compgen -G "$prefix/lib/python3*/dist-packages/rovermap" | head -n 1) ||
+    fail "no lib/python3*/dist-packages/rovermap"
+  [[ -f $package/__init__.py ]] || fail "no $package/__init__.py"
+  (cd "$work" && PYTHONPATH=$(dirname "$package") /usr/bin/python3 -c '
+import numpy as np, rovermap, sys
+assert rovermap.__file__.startswith(sys.argv[1]), rovermap.__file__
+t = np.linspace(0, 6, 300)
+target = np.column_stack([np.cos(t), np.sin(2 * t), 0.3 * t])
+source = target + [0.01, -0.02, 0.005]
+r = rovermap.register(source, target, geometry="curve")
+assert r.usable and np.allclose(r.T[:3, 3], [-0.01, 0.02, -0.005], atol=1e-4), r.T
+' "$package") || fail "import rovermap from $package did not recover the motion"
+fi
 
 echo "PASS"
