@@ -21,6 +21,7 @@ import os as _os
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from ._rovermap import (  # noqa: E402
+    __version__,
     Camera,
     ElevationMap,
     Frame,

@@ -15,6 +15,7 @@ PYBIND11_MODULE(_rovermap, m) {
   m.doc() =
       "rovermap: Zhang's iterative point matching, the mapping pipeline (registered trajectory, "
       "DEM, OctoMap, drift report) and the trajectory and DEM metrics, on numpy arrays";
+  m.attr("__version__") = ROVERMAP_VERSION;  // the CMake project's, as rovermapConfigVersion
   // Errors carry over as the commands report them: a bad key or value is a ValueError naming
   // the key (the commands' usage error), a file that cannot be read or written an OSError
   // naming the file. std::invalid_argument is pybind11's ValueError already.

@@ -13,6 +13,11 @@ def rotation(axis, angle_rad):
     return np.eye(3) + np.sin(angle_rad) * k + (1 - np.cos(angle_rad)) * k @ k
 
 
+def test_version_is_the_projects(datasets):
+    cmake = (datasets.parent / "CMakeLists.txt").read_text()
+    assert f"project(rovermap VERSION {rovermap.__version__} " in cmake
+
+
 def test_bunny_from_arrays_matches_the_command(datasets, rovermap_exe):
     source_file = datasets / "stanford_bunny" / "bun045.ply"
     target_file = datasets / "stanford_bunny" / "bun000.ply"
