@@ -1,5 +1,9 @@
 #include "mapper/OctoMapWorker.hpp"
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <chrono>
 #include <utility>
 
@@ -77,7 +81,25 @@ void OctoMapWorker::Serialise(
   }
 }
 
+namespace {
+
+// glibc keeps the memory the threads free in their arenas; over a long traverse the OcTree's
+// many small allocations and the frames' buffers leave it fragmented, and the resident memory
+// grew with it. Handing it back every 25 insertions kept a 2000-frame loop's resident memory at
+// 153-164 MB after the first lap instead of 168 -> 184 MB, at no per-frame cost (bench/README,
+// "bench_long"); every insertion cost the DEM fusion 3 ms a frame (pages faulted back in).
+constexpr long kTrimEveryInsertions = 25;
+
+void ReturnFreedMemory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace
+
 void OctoMapWorker::Loop() {
+  long insertions = 0;
   for (;;) {
     Job job;
     {
@@ -100,6 +122,10 @@ void OctoMapWorker::Loop() {
       if (!job.points.empty()) last_insert_ms_ = ms;
     }
     changed_.notify_all();
+    if (!job.points.empty() && ++insertions % kTrimEveryInsertions == 0) {
+      job.points = {};  // this frame's buffer goes back too
+      ReturnFreedMemory();
+    }
   }
 }
 
