@@ -377,7 +377,7 @@ void Daemon::Publish() {
   RunInfo run;
   run.sequence = setup_.inbox.string();
   // Frames per second over the frames' own processing time: the daemon idles between frames.
-  for (const FrameResult& r : mapper_->results()) run.wall_ms += r.time.load_ms + r.time.total_ms;
+  run.wall_ms = ProcessingMs(mapper_->results());
   run.extra["serve"] = {{"missing_frames", state_.missing},
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},

@@ -244,6 +244,12 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
   WritePng(path, img);
 }
 
+double ProcessingMs(const std::vector<FrameResult>& results) {
+  double ms = 0.0;
+  for (const FrameResult& r : results) ms += r.time.load_ms + r.time.total_ms;
+  return ms;
+}
+
 double PeakRssMb() {
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;

@@ -41,6 +41,10 @@ struct RunInfo {
   nlohmann::json extra = nlohmann::json::object();  ///< more top-level keys (serve's queue)
 };
 
+/// The frames' own processing time [ms]: reading and ProcessFrame, summed. RunInfo::wall_ms for
+/// a caller that idles between frames (the daemon, a Python loop).
+double ProcessingMs(const std::vector<FrameResult>& results);
+
 /// summary.json: frames, registered, partial, fallbacks (whole increment from dead reckoning,
 /// bad frames included), bad_frames, distance_m, final_correction, timing (per stage: total and
 /// per-frame median, ms), frames_per_second, peak_rss_mb, dem and octomap figures, and `metrics`

@@ -13,6 +13,7 @@
 
 #include "config/Config.hpp"
 #include "io/Georeference.hpp"
+#include "io/SensorType.hpp"
 #include "registration/PointCloud.hpp"
 
 namespace rovermap::python {
@@ -56,6 +57,11 @@ std::vector<Eigen::Isometry3d> PosesFrom(py::handle poses, const char* name);
 ///        file when it cannot be read.
 config::Config ConfigFrom(py::handle config, const py::kwargs& overrides,
                           const std::string& section);
+
+/// "stereo" or "cloud", as sequence.yaml spells them.
+inline const char* SensorName(io::SensorType type) {
+  return type == io::SensorType::kStereo ? "stereo" : "cloud";
+}
 
 /// A geodetic origin from (latitude deg, longitude deg, altitude m) or a dict with those keys
 /// (altitude optional). @throw py::value_error naming `name`.

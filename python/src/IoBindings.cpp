@@ -35,10 +35,6 @@ py::object Covariances(const std::vector<Eigen::Matrix3d>& covariances) {
   return std::move(a);
 }
 
-const char* SensorName(io::SensorType type) {
-  return type == io::SensorType::kStereo ? "stereo" : "cloud";
-}
-
 using Sequence = SequenceHandle;
 
 std::vector<Eigen::Isometry3d> Poses(const std::vector<io::StampedPose>& stamped) {

@@ -128,8 +128,7 @@ mapper::FrameResult ProcessFrame(MapperHandle& h, py::handle data, py::handle od
   if (!groundtruth_pose.is_none())
     frame.T_world_body_truth = PoseFrom(groundtruth_pose, "groundtruth_pose");
   frame.index = m.results().size();
-  if ((stereo && frame.left.empty()) ||
-      (!stereo && py::isinstance<io::Frame>(data) && !frame.left.empty())) {
+  if (frame.left.empty() == stereo) {  // only a Frame can get here with the wrong kind
     throw py::value_error("data: the frame's sensor does not match this mapper's");
   }
   py::gil_scoped_release release;
@@ -276,8 +275,7 @@ A frame the pipeline cannot use is not an error: its status is bad_frame.)")
               std::filesystem::create_directories(out);
               mapper::RunInfo run;
               run.sequence = h.sequence;
-              for (const auto& r : h.mapper->results())
-                run.wall_ms += r.time.load_ms + r.time.total_ms;
+              run.wall_ms = mapper::ProcessingMs(h.mapper->results());
               summary = mapper::WriteOutputs(out, *h.mapper, run, h.cfg.eval);
             }
             return ToPython(summary);
@@ -318,7 +316,7 @@ atomically). Returns summary.json as a dict. Raises OSError naming a file it can
           },
           "the DEM so far (read-only; it shares the mapper's memory)")
       .def_property_readonly("sensor", [](const MapperHandle& h) {
-        return h.mapper->sequence().sensor_type == io::SensorType::kStereo ? "stereo" : "cloud";
+        return SensorName(h.mapper->sequence().sensor_type);
       });
 }
 
