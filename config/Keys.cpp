@@ -303,7 +303,9 @@ std::vector<KeyEntry> BuildRegistry() {
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
   map.Double("odometry_bias_rate", &P::odometry_bias_rate, "1/frame", Bounds{0, false, 1, false},
-             "how fast dead reckoning's bias estimate follows the registration; 0 = off");
+             "evidence each frame forgets in dead reckoning's bias estimate; 0 = off");
+  map.Double("odometry_bias_prior_ratio", &P::odometry_bias_prior_ratio, "ratio", GreaterThan(0),
+             "prior sigma of dead reckoning's bias per step, fraction of its sigma per step");
   map.Double("bias_min_information", &P::bias_min_information, "ratio", Bounds{0, false, 1, true},
              "directions with at least this information inform the bias estimate");
 

@@ -23,8 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '2'};
-constexpr std::uint32_t kRecordMagic = 0x324A4D52;  // "RMJ2"
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '3'};
+constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
 
@@ -171,6 +171,7 @@ void PutResult(Writer* w, const FrameResult& f) {
   w->Matrix(f.increment_covariance);
   w->Put<double>(f.reference_distance_m);
   for (int i = 0; i < 6; ++i) w->Put<double>(f.odometry_bias(i));
+  w->Matrix(f.odometry_bias_information);
 }
 
 FrameResult GetResult(Reader* r) {
@@ -213,6 +214,7 @@ FrameResult GetResult(Reader* r) {
   r->Matrix(&f.increment_covariance);
   f.reference_distance_m = r->Get<double>();
   for (int i = 0; i < 6; ++i) f.odometry_bias(i) = r->Get<double>();
+  r->Matrix(&f.odometry_bias_information);
   return f;
 }
 

@@ -64,12 +64,14 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
 
   Matrix6d projector_scaled = Matrix6d::Zero();  // onto the constrained eigenvectors
   Matrix6d informed_scaled = Matrix6d::Zero();   // onto those that inform the bias
+  Matrix6d informed_information_scaled = Matrix6d::Zero();
   Matrix6d covariance_scaled = Matrix6d::Zero();
   unsigned taken = 0;
   for (int i = 5; i >= 0; --i) {
     const Vector6d v = V.col(i);
     if (lambda(i) > 0.0 && lambda(i) >= bias_min_information * largest) {
       informed_scaled += v * v.transpose();
+      informed_information_scaled += lambda(i) * v * v.transpose();
     }
     if (lambda(i) > 0.0 && (min_information <= 0.0 || lambda(i) >= min_information * largest)) {
       projector_scaled += v * v.transpose();
@@ -99,7 +101,10 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   const Vector6d informed = (informed_scaled * delta_scaled).cwiseProduct(s);
   const Eigen::LDLT<Matrix6d> odometry(odometry_covariance);
   if (odometry.info() == Eigen::Success && informed.dot(odometry.solve(informed)) <= 9.0) {
-    out.bias_innovation = (informed_scaled * (delta_scaled - bias_scaled)).cwiseProduct(s);
+    out.bias_correction = (informed_scaled * delta_scaled).cwiseProduct(s);
+    // Back from scaled coordinates: I = S⁻¹ I_scaled S⁻¹.
+    out.bias_information =
+        s.cwiseInverse().asDiagonal() * informed_information_scaled * s.cwiseInverse().asDiagonal();
   }
 
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
@@ -108,13 +113,6 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   out.covariance = s.asDiagonal() * covariance_scaled * s.asDiagonal() +
                    unconstrained * odometry_covariance * unconstrained.transpose();
   return out;
-}
-
-Vector6d BoundedBias(const Vector6d& bias, const Matrix6d& odometry_covariance) {
-  const Eigen::LDLT<Matrix6d> odometry(odometry_covariance);
-  if (odometry.info() != Eigen::Success || !odometry.isPositive()) return bias;
-  const double mahalanobis = std::sqrt(std::max(0.0, bias.dot(odometry.solve(bias))));
-  return mahalanobis > 1.0 ? Vector6d(bias / mahalanobis) : bias;
 }
 
 }  // namespace rovermap::mapper

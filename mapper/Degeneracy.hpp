@@ -41,12 +41,12 @@ struct BlendedIncrement {
   /// Covariance of T for a left perturbation [rx ry rz tx ty tz] (rad, m), target frame: the
   /// registration's in the constrained directions, `odometry_covariance` in the others.
   Matrix6d covariance = Matrix6d::Zero();
-  /// What this frame tells of dead reckoning's bias: the registration's correction minus the
-  /// bias given, in the directions with at least `bias_min_information` (zero elsewhere), as a
-  /// left perturbation [rx ry rz (rad) tx ty tz (m)] of the increment, target frame; zero when
-  /// that correction is beyond 3σ of `odometry_covariance`. The caller moves its estimate by a
-  /// fraction of it (mapper.odometry_bias_rate).
-  Vector6d bias_innovation = Vector6d::Zero();
+  /// What this frame tells of dead reckoning's bias (UpdateBias): the registration's
+  /// correction of the prediction in the directions with at least `bias_min_information`, and
+  /// the registration's information there (unscaled, [rad, m]); both zero elsewhere, and
+  /// everywhere when that correction is beyond 3σ of `odometry_covariance`.
+  Vector6d bias_correction = Vector6d::Zero();
+  Matrix6d bias_information = Matrix6d::Zero();
 };
 
 /// Blends `T_registered` and `T_predicted` (both T_target_source) per eigen-direction of the
@@ -63,11 +63,5 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 const Matrix6d& odometry_covariance,
                                 const Vector6d& odometry_bias = Vector6d::Zero(),
                                 double bias_min_information = 1e-6);
-
-/// `bias` shrunk, if need be, to the 1σ ellipsoid of `odometry_covariance` (same
-/// parameterisation): dead reckoning's error model bounds what a systematic error per increment
-/// can be; the estimate never leaves it. A covariance that is not positive definite leaves the
-/// bias as it is. Never throws.
-Vector6d BoundedBias(const Vector6d& bias, const Matrix6d& odometry_covariance);
 
 }  // namespace rovermap::mapper

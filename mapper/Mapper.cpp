@@ -68,7 +68,7 @@ struct Mapper::Registered {
   unsigned odometry_directions = 0;
   std::optional<registration::RegistrationResult> matcher;
   double reference_distance_m = 0.0;  ///< the matcher's D (0: keep the last one)
-  Vector6d odometry_bias = Vector6d::Zero();  ///< the bias estimate if this frame is chained
+  BiasEstimate odometry_bias;         ///< the bias estimate if this frame is chained
 };
 
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
@@ -147,7 +147,10 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
   // estimate of dead reckoning's bias.
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
-  r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
+  const BiasEstimate bias =
+      reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
+  r.odometry_bias = bias.bias;
+  r.odometry_bias_information = bias.information;
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
@@ -215,7 +218,8 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   meta.T_world_body_odom = T_world_body_odom;
   r.step = Chain(meta, std::nullopt, Matrix6d::Zero());
   r.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
-  r.odometry_bias = OdometryBias();
+  r.odometry_bias = OdometryBias().bias;
+  r.odometry_bias_information = OdometryBias().information;
   results_.push_back(r);
   return r;
 }
@@ -255,7 +259,7 @@ Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
   out.covariance_in_previous = recorded.increment_covariance;
   out.odometry_directions = recorded.odometry_directions;
   out.reference_distance_m = recorded.reference_distance_m;
-  out.odometry_bias = recorded.odometry_bias;
+  out.odometry_bias = {recorded.odometry_bias, recorded.odometry_bias_information};
   return out;
 }
 
@@ -305,7 +309,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // correction that is left against what odometry can be wrong by.
   const BlendedIncrement blended =
       BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
-                     options_.mapper.min_information, odometry_covariance, OdometryBias(),
+                     options_.mapper.min_information, odometry_covariance, OdometryBias().bias,
                      options_.mapper.bias_min_information);
   if (blended.constrained == 0) {
     out.reason = FallbackReason::kRegistrationFailed;
@@ -322,9 +326,13 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   out.reason = FallbackReason::kNone;
   out.odometry_directions = blended.odometry_directions;
   out.T_world_body = T_world_ref * blended.T;
-  out.odometry_bias =
-      BoundedBias(OdometryBias() + options_.mapper.odometry_bias_rate * blended.bias_innovation,
-                  odometry_covariance);
+  if (options_.mapper.odometry_bias_rate > 0.0) {
+    const double ratio = options_.mapper.odometry_bias_prior_ratio;
+    const Matrix6d prior = (ratio * ratio * odometry_covariance).inverse();
+    out.odometry_bias =
+        UpdateBias(OdometryBias(), blended.bias_correction, blended.bias_information, prior,
+                   options_.mapper.odometry_bias_rate, odometry_covariance);
+  }
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
   out.covariance_in_previous = A * blended.covariance * A.transpose();

@@ -17,6 +17,7 @@
 #include "io/Georeference.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/AttitudePrior.hpp"
+#include "mapper/BiasEstimate.hpp"
 #include "mapper/Degeneracy.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/FrameLoader.hpp"
@@ -93,6 +94,8 @@ struct FrameResult {
   /// Dead reckoning's estimated bias per increment after this frame (BlendedIncrement): a left
   /// perturbation [rx ry rz (rad) tx ty tz (m)] in the previous body frame.
   Vector6d odometry_bias = Vector6d::Zero();
+  /// The information that estimate rests on (BiasEstimate, prior excluded).
+  Matrix6d odometry_bias_information = Matrix6d::Zero();
 };
 
 /// Step 1's outcome: a frame's points loaded, indexed (tree built) and their isolated points
@@ -184,8 +187,9 @@ class Mapper {
                   const Matrix6d& covariance_in_previous);
   Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment) const;
   /// Dead reckoning's estimated bias per increment (see BlendIncrement): the last frame's.
-  Vector6d OdometryBias() const {
-    return results_.empty() ? Vector6d::Zero() : results_.back().odometry_bias;
+  BiasEstimate OdometryBias() const {
+    if (results_.empty()) return {};
+    return {results_.back().odometry_bias, results_.back().odometry_bias_information};
   }
   void Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
             const ChainStep& step, FrameResult* result);

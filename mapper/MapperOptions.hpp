@@ -61,9 +61,16 @@ struct MapperOptions {
   double min_information = 1e-4;
   /// Dead reckoning's bias: in the directions kept from dead reckoning, the prediction is moved
   /// by an estimate of its systematic error per frame (a heading-rate bias, a wheel-scale
-  /// error), the running mean of the registration's corrections in the directions they inform:
-  /// each accepted frame moves the estimate this fraction of the way [1/frame]. 0 = off.
+  /// error): the mean of the registration's corrections in the directions they inform, each
+  /// weighted by the registration's information (BiasEstimate). Each frame forgets this
+  /// fraction of the evidence before it, so the estimate follows a bias that changes over
+  /// about 1/rate frames [1/frame]. 0 = off.
   double odometry_bias_rate = 0.02;
+  /// The estimate's zero-mean prior: σ of the bias per step as a fraction of dead reckoning's
+  /// per-step σ (odometry_sigma_*) [ratio]. The weak directions of single frames on gently
+  /// rolling ground are a degree off; this keeps their noise out of the estimate until enough
+  /// frames agree.
+  double odometry_bias_prior_ratio = 0.07;
   /// Directions whose information ratio (as min_information) is at least this inform the bias
   /// estimate [ratio]: below, on a plane's x, y and yaw, the registration's answer is noise.
   double bias_min_information = 1e-6;

@@ -167,17 +167,17 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
   } catch (const mapper::CheckpointError& e) {
     EXPECT_NE(std::string(e.what()).find("state.bin"), std::string::npos) << e.what();
   }
-  // A snapshot of an earlier format (the frame results grew dead reckoning's bias) is named
-  // as such, not as damage.
+  // A snapshot of an earlier format (the frame results grew dead reckoning's bias, then the
+  // information it rests on) is named as such, not as damage.
   f.open(snapshot, std::ios::in | std::ios::out | std::ios::binary);
   f.seekp(7);
-  f.put('1');
+  f.put('2');
   f.close();
   try {
     cp.Restore(m.get(), [&](std::size_t k) { return Read(k); });
-    FAIL() << "a snapshot of format 1 was accepted";
+    FAIL() << "a snapshot of format 2 was accepted";
   } catch (const mapper::CheckpointError& e) {
-    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 1, this one reads 2)"),
+    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 2, this one reads 3)"),
               std::string::npos)
         << e.what();
   }

@@ -143,34 +143,31 @@ TEST(Degeneracy, UnconstrainedDirectionsTakeTheBiasAndInformedOnesUpdateIt) {
   EXPECT_NEAR(dr.x(), rr.x(), 1e-4);
   EXPECT_NEAR(D.translation().z(), R.translation().z(), 1e-4);
 
-  // The innovation: yaw's correction minus the bias; nothing in x and y (no information).
-  EXPECT_NEAR(b.bias_innovation(2), rr.z() - 0.004, 1e-4);
-  EXPECT_NEAR(b.bias_innovation(3), 0.0, 1e-12);
-  EXPECT_NEAR(b.bias_innovation(4), 0.0, 1e-12);
-  EXPECT_NEAR(b.bias_innovation(5), R.translation().z(), 1e-4);
+  // What the frame tells of the bias: yaw's and z's corrections (informed), nothing in x and y
+  // (no information); the registration's information in the informed directions, unscaled.
+  EXPECT_NEAR(b.bias_correction(2), rr.z(), 1e-4);
+  EXPECT_NEAR(b.bias_correction(3), 0.0, 1e-12);
+  EXPECT_NEAR(b.bias_correction(4), 0.0, 1e-12);
+  EXPECT_NEAR(b.bias_correction(5), R.translation().z(), 1e-4);
+  EXPECT_NEAR(b.bias_information(2, 2), info(2, 2), 1e-9 * info(2, 2));
+  EXPECT_LT(b.bias_information.row(3).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT(b.bias_information.row(4).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((b.bias_information.bottomRightCorner<1, 1>() - info.bottomRightCorner<1, 1>())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-9 * info(5, 5));
 
   // With the floor above yaw's information, yaw no longer informs the bias.
   const BlendedIncrement above =
       BlendIncrement(predicted, registered, info, extent, 1e-4, odometry, bias, 1e-4);
-  EXPECT_NEAR(above.bias_innovation(2), 0.0, 1e-12);
+  EXPECT_NEAR(above.bias_correction(2), 0.0, 1e-12);
+  EXPECT_LT(above.bias_information.row(2).cwiseAbs().maxCoeff(), 1e-9 * info(2, 2));
   // A correction beyond 3σ of dead reckoning's error model informs nothing.
   const BlendedIncrement implausible =
       BlendIncrement(predicted, registered, info, extent, 1e-4, Diagonal(0.001, 0.001), bias, 1e-6);
-  EXPECT_EQ(implausible.bias_innovation, Vector6d::Zero());
+  EXPECT_EQ(implausible.bias_correction, Vector6d::Zero());
+  EXPECT_EQ(implausible.bias_information, Matrix6d::Zero());
   // Without a bias the unconstrained directions are the prediction's, as before.
   const BlendedIncrement none = BlendIncrement(predicted, registered, info, extent, 1e-4, odometry);
   EXPECT_NEAR((none.T * predicted.inverse()).translation().x(), 0.0, 1e-9);
-}
-
-TEST(Degeneracy, TheBiasStaysWithinDeadReckoningsErrorModel) {
-  const Matrix6d odometry = Diagonal(0.01, 0.02);
-  Vector6d small;
-  small << 0.001, 0, 0.002, 0.005, 0, 0;
-  EXPECT_EQ(BoundedBias(small, odometry), small);
-  Vector6d large;
-  large << 0, 0, 0.03, 0.04, 0, 0;  // 5σ: shrunk onto the 1σ ellipsoid, same direction
-  const Vector6d bounded = BoundedBias(large, odometry);
-  EXPECT_NEAR(bounded.dot(odometry.inverse() * bounded), 1.0, 1e-12);
-  EXPECT_NEAR(bounded(2) / bounded(3), 0.75, 1e-12);
-  EXPECT_EQ(BoundedBias(large, Matrix6d::Zero()), large);  // no model: left alone
 }
