@@ -170,8 +170,8 @@ void PutResult(Writer* w, const FrameResult& f) {
   w->OptionalPose(f.T_world_body_registered);
   w->Matrix(f.increment_covariance);
   w->Put<double>(f.reference_distance_m);
-  for (int i = 0; i < 6; ++i) w->Put<double>(f.odometry_bias(i));
-  w->Matrix(f.odometry_bias_information);
+  for (int i = 0; i < 6; ++i) w->Put<double>(f.odometry_bias.bias(i));
+  w->Matrix(f.odometry_bias.information);
 }
 
 FrameResult GetResult(Reader* r) {
@@ -213,8 +213,8 @@ FrameResult GetResult(Reader* r) {
   f.T_world_body_registered = r->OptionalPose();
   r->Matrix(&f.increment_covariance);
   f.reference_distance_m = r->Get<double>();
-  for (int i = 0; i < 6; ++i) f.odometry_bias(i) = r->Get<double>();
-  r->Matrix(&f.odometry_bias_information);
+  for (int i = 0; i < 6; ++i) f.odometry_bias.bias(i) = r->Get<double>();
+  r->Matrix(&f.odometry_bias.information);
   return f;
 }
 

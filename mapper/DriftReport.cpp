@@ -55,7 +55,7 @@ nlohmann::json CorrectionJson(const Eigen::Isometry3d& T) {
 
 // Dead reckoning's estimated bias per frame after the last frame (BlendIncrement).
 nlohmann::json OdometryBiasJson(const std::vector<FrameResult>& results) {
-  const Vector6d b = results.empty() ? Vector6d::Zero() : results.back().odometry_bias;
+  const Vector6d b = results.empty() ? Vector6d::Zero() : results.back().odometry_bias.bias;
   return {{"droll_deg", b(0) * kRadToDeg},
           {"dpitch_deg", b(1) * kRadToDeg},
           {"dyaw_deg", b(2) * kRadToDeg},

@@ -147,10 +147,7 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
   // estimate of dead reckoning's bias.
   r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
-  const BiasEstimate bias =
-      reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
-  r.odometry_bias = bias.bias;
-  r.odometry_bias_information = bias.information;
+  r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
   Fuse(source->cloud(), isolated.keep, r.step, &r);
@@ -218,8 +215,7 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   meta.T_world_body_odom = T_world_body_odom;
   r.step = Chain(meta, std::nullopt, Matrix6d::Zero());
   r.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
-  r.odometry_bias = OdometryBias().bias;
-  r.odometry_bias_information = OdometryBias().information;
+  r.odometry_bias = OdometryBias();
   results_.push_back(r);
   return r;
 }
@@ -259,7 +255,7 @@ Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
   out.covariance_in_previous = recorded.increment_covariance;
   out.odometry_directions = recorded.odometry_directions;
   out.reference_distance_m = recorded.reference_distance_m;
-  out.odometry_bias = {recorded.odometry_bias, recorded.odometry_bias_information};
+  out.odometry_bias = recorded.odometry_bias;
   return out;
 }
 

@@ -91,11 +91,10 @@ struct FrameResult {
   std::optional<Eigen::Isometry3d> T_world_body_registered;
   Matrix6d increment_covariance = Matrix6d::Zero();
   double reference_distance_m = 0.0;
-  /// Dead reckoning's estimated bias per increment after this frame (BlendedIncrement): a left
-  /// perturbation [rx ry rz (rad) tx ty tz (m)] in the previous body frame.
-  Vector6d odometry_bias = Vector6d::Zero();
-  /// The information that estimate rests on (BiasEstimate, prior excluded).
-  Matrix6d odometry_bias_information = Matrix6d::Zero();
+  /// Dead reckoning's estimated bias per increment after this frame, and the information it
+  /// rests on (BiasEstimate): a left perturbation [rx ry rz (rad) tx ty tz (m)] in the previous
+  /// body frame.
+  BiasEstimate odometry_bias;
 };
 
 /// Step 1's outcome: a frame's points loaded, indexed (tree built) and their isolated points
@@ -188,8 +187,7 @@ class Mapper {
   Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment) const;
   /// Dead reckoning's estimated bias per increment (see BlendIncrement): the last frame's.
   BiasEstimate OdometryBias() const {
-    if (results_.empty()) return {};
-    return {results_.back().odometry_bias, results_.back().odometry_bias_information};
+    return results_.empty() ? BiasEstimate{} : results_.back().odometry_bias;
   }
   void Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
             const ChainStep& step, FrameResult* result);
