@@ -6,12 +6,16 @@
 // Timing is wall clock from clouds in memory (each library's own cloud type, converted
 // beforehand) to the result: k-d trees, normals, the iterations. See bench/README.md.
 
+#include <fcntl.h>
 #include <omp.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -54,12 +58,16 @@ struct Args {
   int threads = 0;           // 0 = OpenMP default
   int max_iterations = 100;  // every method
   double gate_factor = 0.0;  // peers' gate = gate_factor * D; 0 = rovermap's initial factor (20)
+  int pause_ms = 100;        // idle time before each run [ms] (see Worker::Run)
+  // Internal: a worker process runs one method of one pair (see StartWorker).
+  int worker_pair = -1, worker_method = -1;
+  double worker_gate = 0.0;  // [m]
 };
 
 void Usage(std::ostream& os) {
   os << "usage: bench_register [--runs N] [--pairs bunny|terrain|all] [--data DIR] "
         "[--threads N] [--gate-factor F]\n"
-        "                     [--max-iterations N]\n"
+        "                     [--max-iterations N] [--pause-ms MS]\n"
         "  --runs N      timed runs per method (default 7); the table shows the median\n"
         "  --pairs P     which pairs: bunny (2 Stanford bunny scans), terrain (synthetic), all\n"
         "  --data DIR    datasets directory (default " ROVERMAP_DATASETS_DIR
@@ -67,7 +75,9 @@ void Usage(std::ostream& os) {
         "  --threads N   OpenMP threads for rovermap and Open3D (default: OpenMP's default)\n"
         "  --gate-factor F  peers' max correspondence distance = F x rovermap's D (default: 20,\n"
         "                rovermap's initial Dmax factor)\n"
-        "  --max-iterations N  iteration limit of every method (default 100)\n";
+        "  --max-iterations N  iteration limit of every method (default 100)\n"
+        "  --pause-ms MS idle time before each run, so that the previous method's OpenMP\n"
+        "                threads have stopped spinning (default 100)\n";
 }
 
 Args ParseArgs(int argc, char** argv) {
@@ -86,12 +96,21 @@ Args ParseArgs(int argc, char** argv) {
     } else if (arg == "--threads") {
       a.threads = std::stoi(value());
       if (a.threads < 1) throw std::invalid_argument("--threads must be at least 1");
+    } else if (arg == "--pause-ms") {
+      a.pause_ms = std::stoi(value());
+      if (a.pause_ms < 0) throw std::invalid_argument("--pause-ms must not be negative");
     } else if (arg == "--max-iterations") {
       a.max_iterations = std::stoi(value());
       if (a.max_iterations < 1) throw std::invalid_argument("--max-iterations must be at least 1");
     } else if (arg == "--gate-factor") {
       a.gate_factor = std::stod(value());
       if (!(a.gate_factor > 0.0)) throw std::invalid_argument("--gate-factor must be positive");
+    } else if (arg == "--worker-pair") {
+      a.worker_pair = std::stoi(value());
+    } else if (arg == "--worker-method") {
+      a.worker_method = std::stoi(value());
+    } else if (arg == "--worker-gate") {
+      a.worker_gate = std::stod(value());
     } else if (arg == "-h" || arg == "--help") {
       Usage(std::cout);
       std::exit(0);
@@ -259,6 +278,212 @@ void PrintTable(const std::vector<Row>& rows) {
   for (const auto& row : cells) line(row);
 }
 
+// The three rovermap configurations of the table.
+struct MethodOptions {
+  reg::RegistrationOptions plane, fast, p2p;
+  int max_iterations = 100;
+};
+
+MethodOptions MakeMethodOptions(const Args& args) {
+  MethodOptions o;
+  o.plane.max_iterations = args.max_iterations;  // defaults: point-to-plane, orientation test
+  o.p2p = o.plane;
+  o.p2p.residual = reg::Residual::kPointToPoint;
+  o.fast =
+      rovermap::config::LoadConfig(std::filesystem::path(ROVERMAP_FAST_PRESET), {}).registration;
+  o.fast.max_iterations = args.max_iterations;
+  o.max_iterations = args.max_iterations;
+  return o;
+}
+
+// The table's methods on one pair, in row order (rovermap default first). `gate` is the peers'
+// fixed correspondence distance [m]; the peers hold their own converted clouds.
+std::vector<Method> MakeMethods(const BenchPair& pair, const MethodOptions& o, double gate) {
+  std::vector<Method> methods;
+  methods.push_back({"rovermap point-to-plane (default)",
+                     [&pair, &o] { return RunRovermap(pair, o.plane); }, nullptr});
+  methods.push_back(
+      {"rovermap fast preset", [&pair, &o] { return RunRovermap(pair, o.fast); }, nullptr});
+  methods.push_back({"rovermap point-to-point (paper)",
+                     [&pair, &o] { return RunRovermap(pair, o.p2p); }, nullptr});
+#ifdef ROVERMAP_BENCH_PEERS
+  namespace rb = rovermap::bench;
+  const rb::PeerParams params{gate, o.max_iterations};
+  std::vector<std::shared_ptr<rb::PeerMethod>> peers;
+  peers.push_back(rb::MakePclIcp(pair.source.points, pair.target.points));
+  peers.push_back(rb::MakeOpen3dPointToPoint(pair.source.points, pair.target.points));
+  peers.push_back(rb::MakeOpen3dPointToPlane(pair.source.points, pair.target.points));
+  for (const auto& m : peers) {
+    methods.push_back({m->Name(),
+                       [m, &pair, params] {
+                         RunResult out;
+                         out.T = pair.T_init;
+                         try {
+                           const rb::PeerResult r = m->Run(pair.T_init, params);
+                           out.T = r.T_target_source;
+                           out.time_ms = r.time_ms;
+                           out.iterations = r.iterations;
+                           out.status = r.status;
+                         } catch (const std::exception& e) {  // Open3D throws on bad input
+                           std::cerr << m->Name() << ": " << e.what() << "\n";
+                           out.iterations = 0;
+                           out.status = "error";
+                         }
+                         return out;
+                       },
+                       [m, &pair, params] {
+                         try {
+                           return m->CountIterations(pair.T_init, params);
+                         } catch (const std::exception&) {
+                           return 0;
+                         }
+                       }});
+  }
+#else
+  (void)gate;
+#endif
+  return methods;
+}
+
+std::vector<std::string> MethodNames(const BenchPair& pair, const MethodOptions& o, double gate) {
+  std::vector<std::string> names;
+  for (const Method& m : MakeMethods(pair, o, gate)) names.push_back(m.name);
+  return names;
+}
+
+// One run's result as one line: time, iterations, D, the 3×4 pose, then the status.
+std::string EncodeResult(const RunResult& r) {
+  std::ostringstream os;
+  os.precision(17);
+  os << r.time_ms << ' ' << r.iterations << ' ' << r.reference_distance_m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) os << ' ' << r.T.matrix()(i, j);
+  os << ' ' << (r.status.empty() ? "-" : r.status) << '\n';
+  return os.str();
+}
+
+RunResult DecodeResult(const std::string& line) {
+  std::istringstream is(line);
+  RunResult r;
+  is >> r.time_ms >> r.iterations >> r.reference_distance_m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) is >> r.T.matrix()(i, j);
+  is >> r.status;
+  if (!is) throw std::runtime_error("bench_register: bad worker reply '" + line + "'");
+  if (r.status == "-") r.status.clear();
+  return r;
+}
+
+// Marks a worker's answers on its standard output; other lines there (a library's own log
+// messages) are passed on to standard error.
+constexpr const char* kReplyMark = "@reply ";
+
+// Worker side: "run" -> one result line, "count" -> the iteration count, end of input -> exit.
+int ServeMethod(const Method& method) {
+  std::string command;
+  while (std::getline(std::cin, command)) {
+    if (command == "run") {
+      std::cout << kReplyMark << EncodeResult(method.run()) << std::flush;
+    } else if (command == "count") {
+      const int count = method.count_iterations ? method.count_iterations() : -1;
+      std::cout << kReplyMark << count << '\n' << std::flush;
+    } else {
+      return 2;
+    }
+  }
+  return 0;
+}
+
+// Parent side: a worker process, this program re-executed on one method of one pair.
+class Worker {
+ public:
+  Worker(pid_t pid, int to_child, int from_child, int pause_ms)
+      : pid_(pid), to_(to_child), from_(::fdopen(from_child, "r")), pause_ms_(pause_ms) {}
+  Worker(Worker&& other) noexcept
+      : pid_(other.pid_), to_(other.to_), from_(other.from_), pause_ms_(other.pause_ms_) {
+    other.pid_ = -1;
+    other.to_ = -1;
+    other.from_ = nullptr;
+  }
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+  Worker& operator=(Worker&&) = delete;
+  ~Worker() { Stop(); }
+
+  // One run after an idle pause. libgomp's idle threads spin-wait (300 000 rounds, some
+  // milliseconds) before they sleep: without the pause the previous method's threads still
+  // held the cores when the next run began. Measured (5 rounds, bunny pairs): rovermap's
+  // default 21.5 / 24.1 ms straight after the previous method, 17.8 / 20.4 ms after 100 ms;
+  // Open3D's point-to-plane 96.0 / 112.7 and 96.2 / 116.1 ms.
+  RunResult Run() {
+    if (pause_ms_ > 0) ::usleep(static_cast<useconds_t>(pause_ms_) * 1000);
+    return DecodeResult(Ask("run"));
+  }
+  int CountIterations() { return std::stoi(Ask("count")); }
+
+  void Stop() {
+    if (to_ >= 0) ::close(to_);
+    if (from_ != nullptr) std::fclose(from_);
+    if (pid_ > 0) ::waitpid(pid_, nullptr, 0);
+    to_ = -1;
+    from_ = nullptr;
+    pid_ = -1;
+  }
+
+ private:
+  std::string Ask(const std::string& command) {
+    const std::string line = command + "\n";
+    if (::write(to_, line.data(), line.size()) != static_cast<ssize_t>(line.size()))
+      throw std::runtime_error("bench_register: worker " + std::to_string(pid_) + " is gone");
+    const std::string mark = kReplyMark;
+    for (;;) {
+      std::string reply;
+      int c = std::fgetc(from_);
+      for (; c != EOF && c != '\n'; c = std::fgetc(from_)) reply.push_back(static_cast<char>(c));
+      if (reply.compare(0, mark.size(), mark) == 0) return reply.substr(mark.size());
+      if (!reply.empty()) std::cerr << reply << "\n";
+      if (c == EOF)
+        throw std::runtime_error("bench_register: worker " + std::to_string(pid_) +
+                                 " ended without an answer to '" + command + "'");
+    }
+  }
+
+  pid_t pid_ = -1;
+  int to_ = -1;
+  std::FILE* from_ = nullptr;
+  int pause_ms_ = 0;
+};
+
+Worker StartWorker(int argc, char** argv, std::size_t pair_index, int method, double gate,
+                   int pause_ms) {
+  // Close-on-exec, so that a later worker does not inherit this one's pipe ends: an inherited
+  // write end would keep this worker's stdin open after Stop() and its waitpid would hang.
+  int down[2], up[2];  // parent -> child, child -> parent
+  if (::pipe2(down, O_CLOEXEC) != 0 || ::pipe2(up, O_CLOEXEC) != 0)
+    throw std::runtime_error("bench_register: cannot create a pipe");
+  std::vector<std::string> args(argv, argv + argc);
+  args.insert(args.end(), {"--worker-pair", std::to_string(pair_index), "--worker-method",
+                           std::to_string(method), "--worker-gate", Fmt("%.17g", gate)});
+  std::vector<char*> child_argv;
+  for (std::string& a : args) child_argv.push_back(a.data());
+  child_argv.push_back(nullptr);
+  std::cout << std::flush;
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error("bench_register: cannot fork");
+  if (pid == 0) {
+    ::dup2(down[0], STDIN_FILENO);
+    ::dup2(up[1], STDOUT_FILENO);
+    ::close(down[0]);
+    ::close(down[1]);
+    ::close(up[0]);
+    ::close(up[1]);
+    ::execv("/proc/self/exe", child_argv.data());
+    ::_exit(127);
+  }
+  ::close(down[0]);
+  ::close(up[1]);
+  return Worker(pid, down[1], up[0], pause_ms);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -284,7 +509,18 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  std::cout << "bench_register: " << args.runs << " timed runs per method (+1 warm-up), "
+  const MethodOptions method_options = MakeMethodOptions(args);
+  if (args.worker_pair >= 0) {  // a worker process: one method on one pair, driven over stdin
+    if (static_cast<std::size_t>(args.worker_pair) >= pairs.size()) return 2;
+    const std::vector<Method> methods = MakeMethods(
+        pairs[static_cast<std::size_t>(args.worker_pair)], method_options, args.worker_gate);
+    if (args.worker_method < 0 || static_cast<std::size_t>(args.worker_method) >= methods.size())
+      return 2;
+    return ServeMethod(methods[static_cast<std::size_t>(args.worker_method)]);
+  }
+
+  std::cout << "bench_register: " << args.runs << " timed runs per method (+1 warm-up), each "
+            << "method in its own process, " << args.pause_ms << " ms idle before each run, "
             << "OpenMP threads " << omp_get_max_threads()
             << " (rovermap, Open3D; PCL ICP is single-threaded)";
 #ifdef ROVERMAP_BENCH_PEERS
@@ -297,120 +533,95 @@ int main(int argc, char** argv) {
 
   reg::RegistrationOptions plane_options;  // defaults: point-to-plane, orientation test
   plane_options.max_iterations = args.max_iterations;
-  reg::RegistrationOptions p2p_options = plane_options;
-  p2p_options.residual = reg::Residual::kPointToPoint;
-  reg::RegistrationOptions fast_options =
-      rovermap::config::LoadConfig(std::filesystem::path(ROVERMAP_FAST_PRESET), {}).registration;
-  fast_options.max_iterations = args.max_iterations;
 
   std::vector<Row> rows;
-  for (const BenchPair& pair : pairs) {
-    // Warm-up run of rovermap: D (median spacing of the target) gives everyone's gate.
-    const RunResult warm = RunRovermap(pair, plane_options);
-    const double d_ref = warm.reference_distance_m;
-    const double gate_factor =
-        args.gate_factor > 0.0 ? args.gate_factor : plane_options.dmax_initial_factor;
-    const double gate = gate_factor * d_ref;
-    if (!(gate > 0.0)) {
-      std::cerr << "bench_register: pair " << pair.name
-                << ": rovermap derived no reference distance (" << warm.status
-                << "), skipping the pair\n";
-      continue;
-    }
-    const auto [init_rot, init_trans] = rovermap::testing::PoseError(pair.T_true, pair.T_init);
-    std::printf(
-        "pair %-14s source %zu pts, target %zu pts; initial error %.3f deg, %.2f mm (%s); "
-        "D = %.3f mm, gate = %.0f x D = %.2f mm\n",
-        pair.name.c_str(), pair.source.size(), pair.target.size(), init_rot, init_trans * 1e3,
-        pair.perturbation.c_str(), d_ref * 1e3, gate_factor, gate * 1e3);
-
-    std::vector<Method> methods;
-    methods.push_back({"rovermap point-to-plane (default)",
-                       [&] { return RunRovermap(pair, plane_options); }, nullptr});
-    methods.push_back(
-        {"rovermap fast preset", [&] { return RunRovermap(pair, fast_options); }, nullptr});
-    methods.push_back({"rovermap point-to-point (paper)",
-                       [&] { return RunRovermap(pair, p2p_options); }, nullptr});
-#ifdef ROVERMAP_BENCH_PEERS
-    namespace rb = rovermap::bench;
-    const rb::PeerParams params{gate, plane_options.max_iterations};
-    std::vector<std::unique_ptr<rb::PeerMethod>> peers;
-    peers.push_back(rb::MakePclIcp(pair.source.points, pair.target.points));
-    peers.push_back(rb::MakeOpen3dPointToPoint(pair.source.points, pair.target.points));
-    peers.push_back(rb::MakeOpen3dPointToPlane(pair.source.points, pair.target.points));
-    for (auto& peer : peers) {
-      rb::PeerMethod* m = peer.get();
-      methods.push_back({m->Name(),
-                         [m, &pair, params] {
-                           RunResult out;
-                           out.T = pair.T_init;
-                           try {
-                             const rb::PeerResult r = m->Run(pair.T_init, params);
-                             out.T = r.T_target_source;
-                             out.time_ms = r.time_ms;
-                             out.iterations = r.iterations;
-                             out.status = r.status;
-                           } catch (const std::exception& e) {  // Open3D throws on bad input
-                             std::cerr << m->Name() << ": " << e.what() << "\n";
-                             out.iterations = 0;
-                             out.status = "error";
-                           }
-                           return out;
-                         },
-                         [m, &pair, params] {
-                           try {
-                             return m->CountIterations(pair.T_init, params);
-                           } catch (const std::exception&) {
-                             return 0;
-                           }
-                         }});
-    }
-#endif
-
-    // Warm-up (untimed) of every method, then `runs` rounds, methods interleaved in each
-    // round so that machine noise spreads over all of them.
-    for (const Method& m : methods) m.run();
-    std::vector<std::vector<RunResult>> results(methods.size());
-    for (int r = 0; r < args.runs; ++r)
-      for (std::size_t k = 0; k < methods.size(); ++k) results[k].push_back(methods[k].run());
-
-    const std::size_t first_row = rows.size();
-    for (std::size_t k = 0; k < methods.size(); ++k) {
-      Row row;
-      row.pair = pair.name;
-      row.method = methods[k].name;
-      std::vector<double> times, rots, transs;
-      for (const RunResult& rr : results[k]) {
-        times.push_back(rr.time_ms);
-        const auto [rot, trans] = rovermap::testing::PoseError(pair.T_true, rr.T);
-        rots.push_back(rot);
-        transs.push_back(trans * 1e3);
+  std::signal(SIGPIPE, SIG_IGN);  // a worker that died shows as a failed write, not a kill
+  try {
+    for (std::size_t pair_index = 0; pair_index < pairs.size(); ++pair_index) {
+      const BenchPair& pair = pairs[pair_index];
+      // Each method runs in its own process (this program re-executed), so that no library's
+      // allocations change another's: in one process, after Open3D had run, each default bun045
+      // registration took 26-30 ms instead of 16-17 (glibc had handed the freed memory back and
+      // every run faulted it in again). Worker 0 is rovermap's default; its warm-up run gives D
+      // (median spacing of the target), and D everyone else's gate.
+      std::vector<Worker> workers;
+      workers.push_back(StartWorker(argc, argv, pair_index, 0, 0.0, args.pause_ms));
+      const RunResult warm = workers[0].Run();
+      const double d_ref = warm.reference_distance_m;
+      const double gate_factor =
+          args.gate_factor > 0.0 ? args.gate_factor : plane_options.dmax_initial_factor;
+      const double gate = gate_factor * d_ref;
+      if (!(gate > 0.0)) {
+        std::cerr << "bench_register: pair " << pair.name
+                  << ": rovermap derived no reference distance (" << warm.status
+                  << "), skipping the pair\n";
+        continue;
       }
-      row.median_ms = Median(times);
-      row.min_ms = *std::min_element(times.begin(), times.end());
-      row.max_ms = *std::max_element(times.begin(), times.end());
-      row.rot_deg = Median(rots);
-      row.trans_mm = Median(transs);
-      row.rot_spread_deg =
-          *std::max_element(rots.begin(), rots.end()) - *std::min_element(rots.begin(), rots.end());
-      row.trans_spread_mm = *std::max_element(transs.begin(), transs.end()) -
-                            *std::min_element(transs.begin(), transs.end());
-      row.iterations = results[k].front().iterations;
-      row.status = results[k].front().status;
-      if (row.iterations < 0 && methods[k].count_iterations) {
-        row.iterations = methods[k].count_iterations();
-        if (row.status.empty())
-          row.status =
-              row.iterations < plane_options.max_iterations ? "converged" : "max_iterations";
+      const auto [init_rot, init_trans] = rovermap::testing::PoseError(pair.T_true, pair.T_init);
+      std::printf(
+          "pair %-14s source %zu pts, target %zu pts; initial error %.3f deg, %.2f mm (%s); "
+          "D = %.3f mm, gate = %.0f x D = %.2f mm\n",
+          pair.name.c_str(), pair.source.size(), pair.target.size(), init_rot, init_trans * 1e3,
+          pair.perturbation.c_str(), d_ref * 1e3, gate_factor, gate * 1e3);
+      std::fflush(stdout);
+
+      const std::vector<std::string> names = MethodNames(pair, method_options, gate);
+      for (std::size_t k = 1; k < names.size(); ++k) {
+        workers.push_back(
+            StartWorker(argc, argv, pair_index, static_cast<int>(k), gate, args.pause_ms));
+        workers.back().Run();  // warm-up (untimed)
       }
-      rows.push_back(row);
+
+      // `runs` rounds, methods interleaved in each round so that machine noise spreads over all.
+      std::vector<std::vector<RunResult>> results(workers.size());
+      for (int r = 0; r < args.runs; ++r)
+        for (std::size_t k = 0; k < workers.size(); ++k) results[k].push_back(workers[k].Run());
+      std::vector<int> counted(workers.size(), -1);
+      for (std::size_t k = 0; k < workers.size(); ++k)
+        if (results[k].front().iterations < 0) counted[k] = workers[k].CountIterations();
+      for (Worker& w : workers) w.Stop();
+      const std::size_t first_row = rows.size();
+      for (std::size_t k = 0; k < workers.size(); ++k) {
+        Row row;
+        row.pair = pair.name;
+        row.method = names[k];
+        std::vector<double> times, rots, transs;
+        for (const RunResult& rr : results[k]) {
+          times.push_back(rr.time_ms);
+          const auto [rot, trans] = rovermap::testing::PoseError(pair.T_true, rr.T);
+          rots.push_back(rot);
+          transs.push_back(trans * 1e3);
+        }
+        row.median_ms = Median(times);
+        row.min_ms = *std::min_element(times.begin(), times.end());
+        row.max_ms = *std::max_element(times.begin(), times.end());
+        row.rot_deg = Median(rots);
+        row.trans_mm = Median(transs);
+        row.rot_spread_deg = *std::max_element(rots.begin(), rots.end()) -
+                             *std::min_element(rots.begin(), rots.end());
+        row.trans_spread_mm = *std::max_element(transs.begin(), transs.end()) -
+                              *std::min_element(transs.begin(), transs.end());
+        row.iterations = results[k].front().iterations;
+        row.status = results[k].front().status;
+        if (row.iterations < 0 && counted[k] >= 0) {
+          row.iterations = counted[k];
+          if (row.status.empty())
+            row.status =
+                row.iterations < plane_options.max_iterations ? "converged" : "max_iterations";
+        }
+        rows.push_back(row);
+      }
+      const double t_default = rows[first_row].median_ms;
+      const double t_p2p =
+          rows[first_row + 2].median_ms;  // methods: default, fast preset, p2p, ...
+      for (std::size_t k = first_row; k < rows.size(); ++k) {
+        rows[k].ratio_default = rows[k].median_ms / t_default;
+        rows[k].ratio_p2p = rows[k].median_ms / t_p2p;
+      }
     }
-    const double t_default = rows[first_row].median_ms;
-    const double t_p2p = rows[first_row + 2].median_ms;  // methods: default, fast preset, p2p, ...
-    for (std::size_t k = first_row; k < rows.size(); ++k) {
-      rows[k].ratio_default = rows[k].median_ms / t_default;
-      rows[k].ratio_p2p = rows[k].median_ms / t_p2p;
-    }
+  } catch (const std::exception& e) {
+    std::cerr << e.what() << "\n";
+    return 1;
   }
 
   const double shown_factor =
