@@ -78,7 +78,9 @@ void WriteErrorPlot(const std::filesystem::path& path, const std::vector<PlotEnt
     for (double err : m.ate_origin_error_m) y1 = std::max(y1, err);
     for (double err : m.ate_error_m) y1 = std::max(y1, err);
   }
-  Axes axes{cv::Rect(80, 60, 800, 450), 0.0, x1, 0.0, y1 * 1.05};
+  // Headroom for the legend at the top, one entry per estimate.
+  Axes axes{cv::Rect(80, 60, 800, 450), 0.0, x1, 0.0,
+            y1 * 1.05 * LegendHeadroom(450, usable.size())};
   cv::Mat img(580, 920, CV_8UC3, kWhite);
   DrawAxes(img, axes, "distance travelled [m]", "position error [m]");
   std::vector<std::pair<std::string, cv::Scalar>> legend;

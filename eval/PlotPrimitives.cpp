@@ -81,11 +81,35 @@ void DrawLine(cv::Mat& img, const Axes& a, const std::vector<double>& xs,
 
 void DrawLegend(cv::Mat& img, const std::vector<std::pair<std::string, cv::Scalar>>& items,
                 cv::Point at) {
+  if (items.empty()) return;
+  // A framed, mostly opaque box behind the entries: a curve that runs through the legend's
+  // corner no longer crosses its text, and still shows faintly through.
+  int text_width = 0;
+  for (const auto& item : items) {
+    int baseline = 0;
+    text_width = std::max(text_width, cv::getTextSize(item.first, kFont, 0.5, 1, &baseline).width);
+  }
+  const cv::Rect box =
+      cv::Rect(at.x - 8, at.y - 13, 38 + text_width + 16, 22 * static_cast<int>(items.size()) + 4) &
+      cv::Rect(0, 0, img.cols, img.rows);
+  if (!box.empty()) {
+    cv::Mat region = img(box);
+    const cv::Mat white(region.size(), region.type(), kWhite);
+    cv::addWeighted(white, 0.8, region, 0.2, 0.0, region);
+    cv::rectangle(img, box, kGrey, 1);
+  }
   for (const auto& [label, colour] : items) {
     cv::line(img, at, at + cv::Point(30, 0), colour, 3, cv::LINE_AA);
     cv::putText(img, label, at + cv::Point(38, 5), kFont, 0.5, kBlack, 1, cv::LINE_AA);
     at.y += 22;
   }
+}
+
+int LegendDepth(std::size_t items) { return 17 + 22 * static_cast<int>(items); }
+
+double LegendHeadroom(int height, std::size_t items) {
+  const int free = height - LegendDepth(items);
+  return free > height / 3 ? static_cast<double>(height) / free : 1.5;
 }
 
 void WritePng(const std::filesystem::path& path, const cv::Mat& img) {

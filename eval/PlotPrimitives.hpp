@@ -35,9 +35,15 @@ void DrawAxes(cv::Mat& img, const Axes& a, const std::string& x_label, const std
 /// The polyline through (xs[k], ys[k]).
 void DrawLine(cv::Mat& img, const Axes& a, const std::vector<double>& xs,
               const std::vector<double>& ys, const cv::Scalar& colour, int thickness);
-/// One line of legend per item, from `at` downwards.
+/// One line of legend per item, from `at` downwards, on a framed, mostly opaque white box.
 void DrawLegend(cv::Mat& img, const std::vector<std::pair<std::string, cv::Scalar>>& items,
                 cv::Point at);
+/// How far below `at.y - 20` a legend of `items` entries reaches [px]: a plot whose legend sits
+/// at its area's top (at.y = area.y + 20) keeps its data below this to leave the legend clear.
+int LegendDepth(std::size_t items);
+/// The factor by which a panel of `height` px raises its top value so that its data stays below
+/// a legend of `items` entries.
+double LegendHeadroom(int height, std::size_t items);
 /// Encodes `img` as PNG and writes it atomically. @throw io::IoError naming `path`.
 void WritePng(const std::filesystem::path& path, const cv::Mat& img);
 

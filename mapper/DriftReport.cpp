@@ -194,7 +194,9 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
   cv::putText(img, "drift correction per frame and drift against distance travelled", {80, 25},
               kFont, 0.55, kBlack, 1, cv::LINE_AA);
   // Panels 1-2: what registration changed in each increment; red ticks = dead reckoning used.
-  const Axes translation{cv::Rect(80, 60, 800, 250), 0.0, last, 0.0, peak(dt)};
+  // The translation panel carries the two-line legend: its data stays below it.
+  const Axes translation{cv::Rect(80, 60, 800, 250), 0.0, last, 0.0,
+                         peak(dt) * LegendHeadroom(250, 2)};
   const Axes rotation{cv::Rect(80, 400, 800, 250), 0.0, last, 0.0, peak(dr)};
   for (const auto& [axes, values, label] :
        {std::tuple{translation, dt, "increment correction, translation [m]"},
@@ -218,7 +220,8 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
       drift->odometry.status == eval::MetricStatus::kOk) {
     const auto& reg = drift->registered;
     const auto& odo = drift->odometry;
-    const double y1 = std::max(peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m));
+    const double y1 = std::max(peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m)) *
+                      LegendHeadroom(area.height, 2);
     const Axes axes{area, 0.0, std::max(reg.distance_m.back(), 1e-6), 0.0, y1};
     DrawAxes(img, axes, "distance travelled (ground truth) [m]",
              "position error against the ground truth, aligned at the first pose [m]");
@@ -234,7 +237,8 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
       distance.push_back(travelled);
       correction.push_back(r.step.cumulative_correction.translation().norm());
     }
-    const Axes axes{area, 0.0, std::max(travelled, 1e-6), 0.0, peak(correction)};
+    const Axes axes{area, 0.0, std::max(travelled, 1e-6), 0.0,
+                    peak(correction) * LegendHeadroom(area.height, 1)};
     DrawAxes(img, axes, "distance travelled (registered) [m]",
              "cumulative correction of dead reckoning [m]");
     DrawLine(img, axes, distance, correction, Colour(1), 2);
