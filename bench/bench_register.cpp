@@ -281,7 +281,6 @@ void PrintTable(const std::vector<Row>& rows) {
 // The three rovermap configurations of the table.
 struct MethodOptions {
   reg::RegistrationOptions plane, fast, p2p;
-  int max_iterations = 100;
 };
 
 MethodOptions MakeMethodOptions(const Args& args) {
@@ -292,63 +291,62 @@ MethodOptions MakeMethodOptions(const Args& args) {
   o.fast =
       rovermap::config::LoadConfig(std::filesystem::path(ROVERMAP_FAST_PRESET), {}).registration;
   o.fast.max_iterations = args.max_iterations;
-  o.max_iterations = args.max_iterations;
   return o;
 }
 
-// The table's methods on one pair, in row order (rovermap default first). `gate` is the peers'
-// fixed correspondence distance [m]; the peers hold their own converted clouds.
-std::vector<Method> MakeMethods(const BenchPair& pair, const MethodOptions& o, double gate) {
-  std::vector<Method> methods;
-  methods.push_back({"rovermap point-to-plane (default)",
-                     [&pair, &o] { return RunRovermap(pair, o.plane); }, nullptr});
-  methods.push_back(
-      {"rovermap fast preset", [&pair, &o] { return RunRovermap(pair, o.fast); }, nullptr});
-  methods.push_back({"rovermap point-to-point (paper)",
-                     [&pair, &o] { return RunRovermap(pair, o.p2p); }, nullptr});
+// The table's methods, in row order: rovermap's three, then the peers'.
+#ifdef ROVERMAP_BENCH_PEERS
+constexpr int kMethodCount = 6;
+#else
+constexpr int kMethodCount = 3;
+#endif
+
+// Method `index` of the table on one pair, and only that one: a worker converts no cloud for
+// another library. `gate` is the peers' fixed correspondence distance [m].
+Method MakeMethod(const BenchPair& pair, const MethodOptions& o, double gate, int index) {
+  if (index == 0)
+    return {"rovermap point-to-plane (default)", [&pair, &o] { return RunRovermap(pair, o.plane); },
+            nullptr};
+  if (index == 1)
+    return {"rovermap fast preset", [&pair, &o] { return RunRovermap(pair, o.fast); }, nullptr};
+  if (index == 2)
+    return {"rovermap point-to-point (paper)", [&pair, &o] { return RunRovermap(pair, o.p2p); },
+            nullptr};
 #ifdef ROVERMAP_BENCH_PEERS
   namespace rb = rovermap::bench;
-  const rb::PeerParams params{gate, o.max_iterations};
-  std::vector<std::shared_ptr<rb::PeerMethod>> peers;
-  peers.push_back(rb::MakePclIcp(pair.source.points, pair.target.points));
-  peers.push_back(rb::MakeOpen3dPointToPoint(pair.source.points, pair.target.points));
-  peers.push_back(rb::MakeOpen3dPointToPlane(pair.source.points, pair.target.points));
-  for (const auto& m : peers) {
-    methods.push_back({m->Name(),
-                       [m, &pair, params] {
-                         RunResult out;
-                         out.T = pair.T_init;
-                         try {
-                           const rb::PeerResult r = m->Run(pair.T_init, params);
-                           out.T = r.T_target_source;
-                           out.time_ms = r.time_ms;
-                           out.iterations = r.iterations;
-                           out.status = r.status;
-                         } catch (const std::exception& e) {  // Open3D throws on bad input
-                           std::cerr << m->Name() << ": " << e.what() << "\n";
-                           out.iterations = 0;
-                           out.status = "error";
-                         }
-                         return out;
-                       },
-                       [m, &pair, params] {
-                         try {
-                           return m->CountIterations(pair.T_init, params);
-                         } catch (const std::exception&) {
-                           return 0;
-                         }
-                       }});
-  }
+  const rb::PeerParams params{gate, o.plane.max_iterations};
+  const std::shared_ptr<rb::PeerMethod> m =
+      index == 3   ? rb::MakePclIcp(pair.source.points, pair.target.points)
+      : index == 4 ? rb::MakeOpen3dPointToPoint(pair.source.points, pair.target.points)
+                   : rb::MakeOpen3dPointToPlane(pair.source.points, pair.target.points);
+  return {m->Name(),
+          [m, &pair, params] {
+            RunResult out;
+            out.T = pair.T_init;
+            try {
+              const rb::PeerResult r = m->Run(pair.T_init, params);
+              out.T = r.T_target_source;
+              out.time_ms = r.time_ms;
+              out.iterations = r.iterations;
+              out.status = r.status;
+            } catch (const std::exception& e) {  // Open3D throws on bad input
+              std::cerr << m->Name() << ": " << e.what() << "\n";
+              out.iterations = 0;
+              out.status = "error";
+            }
+            return out;
+          },
+          [m, &pair, params] {
+            try {
+              return m->CountIterations(pair.T_init, params);
+            } catch (const std::exception&) {
+              return 0;
+            }
+          }};
 #else
   (void)gate;
+  return {};
 #endif
-  return methods;
-}
-
-std::vector<std::string> MethodNames(const BenchPair& pair, const MethodOptions& o, double gate) {
-  std::vector<std::string> names;
-  for (const Method& m : MakeMethods(pair, o, gate)) names.push_back(m.name);
-  return names;
 }
 
 // One run's result as one line: time, iterations, D, the 3×4 pose, then the status.
@@ -378,11 +376,14 @@ RunResult DecodeResult(const std::string& line) {
 // messages) are passed on to standard error.
 constexpr const char* kReplyMark = "@reply ";
 
-// Worker side: "run" -> one result line, "count" -> the iteration count, end of input -> exit.
+// Worker side: "name" -> the method's name, "run" -> one result line, "count" -> the
+// iteration count, end of input -> exit.
 int ServeMethod(const Method& method) {
   std::string command;
   while (std::getline(std::cin, command)) {
-    if (command == "run") {
+    if (command == "name") {
+      std::cout << kReplyMark << method.name << '\n' << std::flush;
+    } else if (command == "run") {
       std::cout << kReplyMark << EncodeResult(method.run()) << std::flush;
     } else if (command == "count") {
       const int count = method.count_iterations ? method.count_iterations() : -1;
@@ -420,6 +421,7 @@ class Worker {
     return DecodeResult(Ask("run"));
   }
   int CountIterations() { return std::stoi(Ask("count")); }
+  std::string Name() { return Ask("name"); }
 
   void Stop() {
     if (to_ >= 0) ::close(to_);
@@ -497,26 +499,34 @@ int main(int argc, char** argv) {
   }
   if (args.threads > 0) omp_set_num_threads(args.threads);
 
-  std::vector<BenchPair> pairs;
-  try {
-    if (args.pairs == "bunny" || args.pairs == "all") {
-      pairs.push_back(BunnyPair(args.data_dir, "bun045.ply", "bun000.ply"));
-      pairs.push_back(BunnyPair(args.data_dir, "bun315.ply", "bun000.ply"));
-    }
-    if (args.pairs == "terrain" || args.pairs == "all") pairs.push_back(TerrainPair());
-  } catch (const std::exception& e) {
-    std::cerr << "bench_register: " << e.what() << "\n";
-    return 1;
+  // The selected pairs, loaded on demand: a worker loads only its own.
+  std::vector<std::function<BenchPair()>> loaders;
+  if (args.pairs == "bunny" || args.pairs == "all") {
+    loaders.push_back([&] { return BunnyPair(args.data_dir, "bun045.ply", "bun000.ply"); });
+    loaders.push_back([&] { return BunnyPair(args.data_dir, "bun315.ply", "bun000.ply"); });
   }
+  if (args.pairs == "terrain" || args.pairs == "all") loaders.push_back(TerrainPair);
 
   const MethodOptions method_options = MakeMethodOptions(args);
   if (args.worker_pair >= 0) {  // a worker process: one method on one pair, driven over stdin
-    if (static_cast<std::size_t>(args.worker_pair) >= pairs.size()) return 2;
-    const std::vector<Method> methods = MakeMethods(
-        pairs[static_cast<std::size_t>(args.worker_pair)], method_options, args.worker_gate);
-    if (args.worker_method < 0 || static_cast<std::size_t>(args.worker_method) >= methods.size())
+    if (static_cast<std::size_t>(args.worker_pair) >= loaders.size() || args.worker_method < 0 ||
+        args.worker_method >= kMethodCount)
       return 2;
-    return ServeMethod(methods[static_cast<std::size_t>(args.worker_method)]);
+    try {
+      const BenchPair pair = loaders[static_cast<std::size_t>(args.worker_pair)]();
+      return ServeMethod(MakeMethod(pair, method_options, args.worker_gate, args.worker_method));
+    } catch (const std::exception& e) {
+      std::cerr << "bench_register: " << e.what() << "\n";
+      return 1;
+    }
+  }
+
+  std::vector<BenchPair> pairs;
+  try {
+    for (const auto& load : loaders) pairs.push_back(load());
+  } catch (const std::exception& e) {
+    std::cerr << "bench_register: " << e.what() << "\n";
+    return 1;
   }
 
   std::cout << "bench_register: " << args.runs << " timed runs per method (+1 warm-up), each "
@@ -531,8 +541,7 @@ int main(int argc, char** argv) {
 #endif
   std::cout << "; load average " << LoadAverage() << "\n\n";
 
-  reg::RegistrationOptions plane_options;  // defaults: point-to-plane, orientation test
-  plane_options.max_iterations = args.max_iterations;
+  const reg::RegistrationOptions& plane_options = method_options.plane;
 
   std::vector<Row> rows;
   std::signal(SIGPIPE, SIG_IGN);  // a worker that died shows as a failed write, not a kill
@@ -565,12 +574,12 @@ int main(int argc, char** argv) {
           pair.perturbation.c_str(), d_ref * 1e3, gate_factor, gate * 1e3);
       std::fflush(stdout);
 
-      const std::vector<std::string> names = MethodNames(pair, method_options, gate);
-      for (std::size_t k = 1; k < names.size(); ++k) {
-        workers.push_back(
-            StartWorker(argc, argv, pair_index, static_cast<int>(k), gate, args.pause_ms));
+      for (int k = 1; k < kMethodCount; ++k) {
+        workers.push_back(StartWorker(argc, argv, pair_index, k, gate, args.pause_ms));
         workers.back().Run();  // warm-up (untimed)
       }
+      std::vector<std::string> names;
+      for (Worker& w : workers) names.push_back(w.Name());
 
       // `runs` rounds, methods interleaved in each round so that machine noise spreads over all.
       std::vector<std::vector<RunResult>> results(workers.size());

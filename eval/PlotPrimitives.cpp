@@ -27,6 +27,11 @@ std::string TickLabel(double value, double step) {
   return s.str();
 }
 
+// Legend geometry [px]: one row per entry; the box starts above the first row's line and ends
+// below the last row's text; panels place the first row 20 px below their top.
+constexpr int kLegendRow = 22, kLegendBoxAbove = 13, kLegendBoxBelow = 4, kLegendOffset = 20;
+constexpr int kLegendMargin = 6;  // between the box and the data under it
+
 }  // namespace
 
 cv::Scalar Colour(std::size_t k) { return kPalette[k % (sizeof(kPalette) / sizeof(kPalette[0]))]; }
@@ -89,9 +94,9 @@ void DrawLegend(cv::Mat& img, const std::vector<std::pair<std::string, cv::Scala
     int baseline = 0;
     text_width = std::max(text_width, cv::getTextSize(item.first, kFont, 0.5, 1, &baseline).width);
   }
-  const cv::Rect box =
-      cv::Rect(at.x - 8, at.y - 13, 38 + text_width + 16, 22 * static_cast<int>(items.size()) + 4) &
-      cv::Rect(0, 0, img.cols, img.rows);
+  const cv::Rect box = cv::Rect(at.x - 8, at.y - kLegendBoxAbove, 38 + text_width + 16,
+                                kLegendRow * static_cast<int>(items.size()) + kLegendBoxBelow) &
+                       cv::Rect(0, 0, img.cols, img.rows);
   if (!box.empty()) {
     cv::Mat region = img(box);
     const cv::Mat white(region.size(), region.type(), kWhite);
@@ -101,11 +106,14 @@ void DrawLegend(cv::Mat& img, const std::vector<std::pair<std::string, cv::Scala
   for (const auto& [label, colour] : items) {
     cv::line(img, at, at + cv::Point(30, 0), colour, 3, cv::LINE_AA);
     cv::putText(img, label, at + cv::Point(38, 5), kFont, 0.5, kBlack, 1, cv::LINE_AA);
-    at.y += 22;
+    at.y += kLegendRow;
   }
 }
 
-int LegendDepth(std::size_t items) { return 17 + 22 * static_cast<int>(items); }
+int LegendDepth(std::size_t items) {
+  return kLegendOffset - kLegendBoxAbove + kLegendRow * static_cast<int>(items) + kLegendBoxBelow +
+         kLegendMargin;
+}
 
 double LegendHeadroom(int height, std::size_t items) {
   const int free = height - LegendDepth(items);

@@ -195,8 +195,9 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
               kFont, 0.55, kBlack, 1, cv::LINE_AA);
   // Panels 1-2: what registration changed in each increment; red ticks = dead reckoning used.
   // The translation panel carries the two-line legend: its data stays below it.
-  const Axes translation{cv::Rect(80, 60, 800, 250), 0.0, last, 0.0,
-                         peak(dt) * LegendHeadroom(250, 2)};
+  const cv::Rect translation_area(80, 60, 800, 250);
+  const Axes translation{translation_area, 0.0, last, 0.0,
+                         peak(dt) * LegendHeadroom(translation_area.height, 2)};
   const Axes rotation{cv::Rect(80, 400, 800, 250), 0.0, last, 0.0, peak(dr)};
   for (const auto& [axes, values, label] :
        {std::tuple{translation, dt, "increment correction, translation [m]"},
