@@ -106,6 +106,12 @@ std::vector<KeyEntry> BuildRegistry() {
   reg.Bool("use_uncertainty", &R::use_uncertainty, "weight, gate pairs by covariances, not Dmax");
   reg.Double("mahalanobis_gate", &R::mahalanobis_gate, "chi^2", GreaterThan(0),
              "on the squared Mahalanobis distance (3 dof, 95 %)");
+  reg.Double(
+      "seed_rotation_sigma_deg", &R::seed_rotation_sigma_deg, "deg", AtLeast(0),
+      "seed's 1-sigma in the gate, shrinks with the steps; 0 = replay: mapper.seed_gate_scale");
+  reg.Double(
+      "seed_translation_sigma_m", &R::seed_translation_sigma_m, "m", AtLeast(0),
+      "seed's 1-sigma in the gate, shrinks with the steps; 0 = replay: mapper.seed_gate_scale");
   reg.Int("min_pairs", &R::min_pairs, "count", AtLeast(3), "fewer pairs after gating = failure");
 
   using S = stereo::StereoOptions;
@@ -282,6 +288,8 @@ std::vector<KeyEntry> BuildRegistry() {
           "neighbours an unisolated point has within that radius");
   map.Bool("use_point_covariances", &P::use_point_covariances,
            "register with the points' covariances when both frames carry them");
+  map.Double("seed_gate_scale", &P::seed_gate_scale, "ratio", AtLeast(0),
+             "covariance gate first opens by this x odometry sigma per step; 0 = sensor's alone");
   map.Double("min_inlier_ratio", &P::min_inlier_ratio, "ratio", Bounds{0, false, 1, false},
              "reject a registration with fewer inliers / sampled points");
   map.Double("max_rms_m", &P::max_rms_m, "m", GreaterThan(0),

@@ -140,8 +140,8 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction
   // (or, re-applying a journalled frame, what that gave).
   const auto register_start = Clock::now();
-  const Registered reg = recorded ? Recorded(*recorded)
-                                  : RegisterOntoReference(*source, frame.T_world_body_odom);
+  const Registered reg =
+      recorded ? Recorded(*recorded) : RegisterOntoReference(*source, frame.T_world_body_odom);
   r.time.register_ms = MsSince(register_start);
 
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
@@ -290,6 +290,15 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   registration.use_uncertainty |= options_.mapper.use_point_covariances &&
                                   source.cloud().HasCovariances() &&
                                   target.cloud().HasCovariances();
+  // The Mahalanobis gate opens by what dead reckoning may be wrong by over this step, unless
+  // the configuration says how far the seed can be off.
+  const OdometrySigma seed =
+      OdometryStepSigma(T_ref_predicted.translation().norm(), options_.mapper);
+  const double scale = options_.mapper.seed_gate_scale;
+  if (registration.seed_rotation_sigma_deg <= 0.0)
+    registration.seed_rotation_sigma_deg = scale * seed.rotation_rad * 180.0 / M_PI;
+  if (registration.seed_translation_sigma_m <= 0.0)
+    registration.seed_translation_sigma_m = scale * seed.translation_m;
   out.matcher = registration::Register(source, target, T_ref_predicted, registration);
   const registration::RegistrationResult& m = *out.matcher;
   out.reference_distance_m = m.reference_distance_m;

@@ -30,6 +30,11 @@ struct MapperOptions {
   /// (stereo frames; clouds with a camera in sequence.yaml). Far stereo points, whose depth is
   /// uncertain by decimetres, then stop pulling the estimate.
   bool use_point_covariances = true;
+  /// With point covariances, the Mahalanobis gate first opens by this many times dead
+  /// reckoning's per-step σ (odometry_sigma_*), then closes as the matcher's steps shrink
+  /// (registration.seed_*_sigma, which win when set): pairs the seed's heading error displaced
+  /// are kept until they have turned it back [ratio]. 0 = the sensor's gate alone.
+  double seed_gate_scale = 1.0;
 
   /// Acceptance of a registration (FrameJudge). The result is rejected (the whole increment
   /// falls back to dead reckoning) when its inlier ratio is below this [ratio]...

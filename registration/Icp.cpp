@@ -16,6 +16,10 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kRadToDeg = 180.0 / M_PI;
+// The seed gate's spread after a step: this many times the step (SeedGate, PassesGate).
+constexpr double kSeedGateStepFactor = 3.0;
+// While the seed gate is open, a query searches at least this many σ of its displacement.
+constexpr double kSeedGateSearchSigmas = 3.0;
 
 bool NeedsOrientations(const RegistrationOptions& o) {
   return o.orientation_threshold_deg > 0.0 || EffectiveResidual(o) == Residual::kPointToPlane;
@@ -85,6 +89,27 @@ double MedianSpread(const IndexedCloud& source, const std::vector<std::size_t>& 
   return *mid;
 }
 
+// How far the current estimate may still be from the solution, 1σ, as a left perturbation
+// about the target's origin: at first the seed's uncertainty, then what the last step says is
+// left (SeedGate). Zero: the gate is the sensor's alone.
+struct PoseSpread {
+  double rotation_var_rad2 = 0.0;
+  double translation_var_m2 = 0.0;
+
+  bool Open() const { return rotation_var_rad2 > 0.0 || translation_var_m2 > 0.0; }
+  /// Covariance of the displacement of the point p (target frame): δr × p + δt.
+  Eigen::Matrix3d At(const Eigen::Vector3d& p) const {
+    return rotation_var_rad2 * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose()) +
+           translation_var_m2 * Eigen::Matrix3d::Identity();
+  }
+  /// The search radius for p: Dmax, widened to this many σ of p's displacement.
+  double Radius(const Eigen::Vector3d& p, double dmax, double sigmas) const {
+    if (!Open()) return dmax;
+    return std::max(dmax,
+                    sigmas * std::sqrt(rotation_var_rad2 * p.squaredNorm() + translation_var_m2));
+  }
+};
+
 // Closest points in `to` of every `step`-th `from` point listed in `queries`, mapped by
 // T_to_from, within `dmax`, then the orientation test (Zhang 1994, §4.1 and §4.2).
 // `hints` holds, per point of `from`, its previous closest point in `to` (warm start for the
@@ -93,7 +118,7 @@ double MedianSpread(const IndexedCloud& source, const std::vector<std::size_t>& 
 // already be, for the orientation test). Returns how many pairs the orientation test rejected.
 std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
                            const Eigen::Isometry3d& T_to_from, double dmax,
-                           const OrientationTest& orientation_test,
+                           const PoseSpread& spread, const OrientationTest& orientation_test,
                            const std::vector<std::size_t>& queries, std::size_t step, bool backward,
                            bool need_orientations, std::vector<std::size_t>* hints,
                            std::vector<Match>* out) {
@@ -108,7 +133,9 @@ std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
 #pragma omp parallel for schedule(dynamic, 128) if (count > 256)
   for (long q = 0; q < count; ++q) {
     const std::size_t i = queries[static_cast<std::size_t>(q) * step];
-    const Neighbor nb = tree.FindClosest(T_to_from * pts[i], dmax, (*hints)[i]);
+    const Eigen::Vector3d p = T_to_from * pts[i];
+    const Neighbor nb =
+        tree.FindClosest(p, spread.Radius(p, dmax, kSeedGateSearchSigmas), (*hints)[i]);
     if (!nb.found) continue;
     (*hints)[i] = nb.index;
     local[static_cast<std::size_t>(q)] =
@@ -167,15 +194,20 @@ Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& targe
 }
 
 // Step d: a pair is kept within Dmax, or with use_uncertainty within the χ² gate on the
-// squared Mahalanobis distance dᵀ(R Λx Rᵀ + Λy)⁻¹ d (§4.4) instead.
+// squared Mahalanobis distance dᵀ(R Λx Rᵀ + Λy + Λpose)⁻¹ d (§4.4) instead. Λpose spreads the
+// pose's own uncertainty to the point p (δr × p + δt): without it the gate, unlike Dmax, is
+// anchored to the seed from the first iteration, and a seed a degree off in heading gates out
+// exactly the far points that would turn it back (issue 31: 60-75 % of such a seed's heading
+// error stayed in KITTI's registered increments).
 bool PassesGate(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
                 const Eigen::Isometry3d& T, double dmax, double sampling_variance,
-                const RegistrationOptions& options) {
+                const PoseSpread& spread, const RegistrationOptions& options) {
   if (!options.use_uncertainty) return m.distance <= dmax;
-  const Eigen::Vector3d d =
-      T * source.cloud().points[m.source_index] - target.cloud().points[m.target_index];
-  const Eigen::Matrix3d cov =
+  const Eigen::Vector3d p = T * source.cloud().points[m.source_index];
+  const Eigen::Vector3d d = p - target.cloud().points[m.target_index];
+  Eigen::Matrix3d cov =
       PairCovariance(source.cloud(), target.cloud(), m, T.linear(), sampling_variance);
+  if (spread.Open()) cov += spread.At(p);
   return d.dot(cov.ldlt().solve(d)) <= options.mahalanobis_gate;
 }
 
@@ -198,7 +230,8 @@ double UncertaintyWeight(const IndexedCloud& source, const IndexedCloud& target,
 // run on one core while the other idled): the tests run in parallel, the compaction not.
 void KeepWithinGate(const IndexedCloud& source, const IndexedCloud& target,
                     const Eigen::Isometry3d& T, double dmax, double sampling_variance,
-                    const RegistrationOptions& options, std::vector<Match>* matches) {
+                    const PoseSpread& spread, const RegistrationOptions& options,
+                    std::vector<Match>* matches) {
   if (!options.use_uncertainty) {  // a distance test: one pass, nothing to run in parallel
     matches->erase(std::remove_if(matches->begin(), matches->end(),
                                   [dmax](const Match& m) { return !(m.distance <= dmax); }),
@@ -211,7 +244,7 @@ void KeepWithinGate(const IndexedCloud& source, const IndexedCloud& target,
   for (long k = 0; k < count; ++k) {
     pass[static_cast<std::size_t>(k)] =
         PassesGate(source, target, (*matches)[static_cast<std::size_t>(k)], T, dmax,
-                   sampling_variance, options);
+                   sampling_variance, spread, options);
   }
   std::size_t kept = 0;
   for (std::size_t k = 0; k < matches->size(); ++k)
@@ -482,6 +515,9 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     return result;
   }
   double dmax = options.dmax_initial_factor * d_ref;
+  PoseSpread spread;  // the seed's uncertainty, shrunk step by step (SeedGate)
+  spread.rotation_var_rad2 = std::pow(options.seed_rotation_sigma_deg * kDegToRad, 2);
+  spread.translation_var_m2 = std::pow(options.seed_translation_sigma_m, 2);
   OrientationTest orientation_test(options);
   // Per-axis variance of the offset between two independent samplings of spacing D.
   const double sampling_variance = d_ref * d_ref / 12.0;
@@ -581,13 +617,13 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     auto match = [&] {
       matches.clear();
       orientation_rejected =
-          MatchDirection(source, target, T, dmax, orientation_test, source_sample, step, false,
-                         need_orientations, &forward_hints, &matches);
+          MatchDirection(source, target, T, dmax, spread, orientation_test, source_sample, step,
+                         false, need_orientations, &forward_hints, &matches);
       std::size_t n = (source_sample.size() + step - 1) / step;
       if (symmetric) {
         orientation_rejected +=
-            MatchDirection(target, source, T.inverse(), dmax, orientation_test, target_sample, step,
-                           true, need_orientations, &backward_hints, &matches);
+            MatchDirection(target, source, T.inverse(), dmax, spread, orientation_test,
+                           target_sample, step, true, need_orientations, &backward_hints, &matches);
         n += (target_sample.size() + step - 1) / step;
       }
       distances.clear();
@@ -618,7 +654,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
     // d. Discard pairs beyond Dmax, or outside the Mahalanobis gate (§4.4); weights.
     const Eigen::Matrix3d rotation = T.linear();
-    KeepWithinGate(source, target, T, dmax, sampling_variance, options, &matches);
+    KeepWithinGate(source, target, T, dmax, sampling_variance, spread, options, &matches);
     const std::size_t kept = matches.size();
     std::size_t forward = 0;
     for (const Match& m : matches) forward += !m.backward;
@@ -716,6 +752,13 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
                 options.rotation_tolerance_deg;
       }
     }
+    // What is left of the seed's uncertainty is at most a few times this step: the gate closes
+    // as the estimate settles, and is the sensor's alone once it has.
+    spread.rotation_var_rad2 =
+        std::min(spread.rotation_var_rad2,
+                 std::pow(kSeedGateStepFactor * trace.step_rotation_deg * kDegToRad, 2));
+    spread.translation_var_m2 = std::min(
+        spread.translation_var_m2, std::pow(kSeedGateStepFactor * trace.step_translation_m, 2));
     if (recent.size() == kCycleMemory) recent.erase(recent.begin());
     recent.push_back(T);  // the iterate before this one: comparing with it is the step test
     T = T_new;
@@ -743,9 +786,9 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
 
   // Final pairs at the final estimate: inliers, RMS, information.
   matches.clear();
-  MatchDirection(source, target, T, dmax, orientation_test, source_sample, 1, false,
+  MatchDirection(source, target, T, dmax, PoseSpread(), orientation_test, source_sample, 1, false,
                  need_orientations, &forward_hints, &matches);
-  KeepWithinGate(source, target, T, dmax, sampling_variance, options, &matches);
+  KeepWithinGate(source, target, T, dmax, sampling_variance, PoseSpread(), options, &matches);
   const std::size_t kept = matches.size();
   double sum_sq = 0.0;
   for (const Match& m : matches) sum_sq += m.distance * m.distance;

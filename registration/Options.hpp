@@ -105,6 +105,13 @@ struct RegistrationOptions {
   bool use_uncertainty = false;
   /// χ² gate on the squared Mahalanobis distance (3 dof, 95 %: 7.81).
   double mahalanobis_gate = 7.81;
+  /// With use_uncertainty: the initial estimate's own uncertainty, 1σ, added to each pair's
+  /// covariance in the Mahalanobis gate (a rotation σ moves a point by σ·range) and shrunk to
+  /// three times each step as the loop goes on, so that pairs the seed's error displaced are
+  /// not gated out before they have pulled. The mapper sets both per frame from its odometry
+  /// model; `rovermap register` takes them as given [deg], [m]. 0 = the sensor's gate alone.
+  double seed_rotation_sigma_deg = 0.0;
+  double seed_translation_sigma_m = 0.0;
 
   /// Fewer pairs than this after gating ends the loop with a failure status [count].
   int min_pairs = 6;

@@ -120,6 +120,8 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(a.coarse_step, b.coarse_step);
   EXPECT_EQ(a.use_uncertainty, b.use_uncertainty);
   EXPECT_EQ(a.mahalanobis_gate, b.mahalanobis_gate);
+  EXPECT_EQ(a.seed_rotation_sigma_deg, b.seed_rotation_sigma_deg);
+  EXPECT_EQ(a.seed_translation_sigma_m, b.seed_translation_sigma_m);
   EXPECT_EQ(a.min_pairs, b.min_pairs);
 }
 
