@@ -12,6 +12,7 @@
 #include "eval/PlotPrimitives.hpp"
 #include "io/OctoMapIo.hpp"
 #include "mapper/Degeneracy.hpp"
+#include "mapper/PoseUncertainty.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -83,7 +84,8 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
   s << "index,timestamp,dx_m,dy_m,dz_m,droll_deg,dpitch_deg,dyaw_deg,"
        "cum_dx_m,cum_dy_m,cum_dz_m,cum_droll_deg,cum_dpitch_deg,cum_dyaw_deg,"
        "status,fallback_reason,odometry_directions,iterations,inliers,inlier_ratio,rms_m,time_ms,"
-       "matcher_status,conditioning,points,outliers_removed,detail\n";
+       "matcher_status,conditioning,points,outliers_removed,detail,"
+       "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
     s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
@@ -94,7 +96,10 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
       << DirectionNames(r.odometry_directions) << ',' << r.iterations << ',' << r.inliers << ','
       << r.inlier_ratio << ',' << r.rms_m << ',' << r.time.total_ms << ',' << r.matcher_status
       << ',' << r.conditioning << ',' << r.points << ',' << r.outliers_removed << ','
-      << Quoted(r.detail) << '\n';
+      << Quoted(r.detail);
+    const PoseSigmas sd = SigmasOf(r.step);
+    s << ',' << sd.x_m << ',' << sd.y_m << ',' << sd.z_m << ',' << sd.roll_deg << ','
+      << sd.pitch_deg << ',' << sd.yaw_deg << '\n';
   }
   return s.str();
 }
@@ -167,6 +172,13 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
   if (drift) {
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},
                           {"odometry", eval::ToJson(drift->odometry)}};
+  }
+  if (const std::optional<CalibrationCheck> check = CheckCalibration(results)) {
+    summary["pose_uncertainty"] = {{"frames", check->frames},
+                                   {"within_2sigma", check->within_2sigma},
+                                   {"nees_mean", Number(check->nees_mean)},
+                                   {"nees_median", Number(check->nees_median)},
+                                   {"nees_expected", 6}};
   }
   for (const auto& [key, value] : run.extra.items()) summary[key] = value;
   return summary;

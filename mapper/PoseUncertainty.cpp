@@ -1,0 +1,65 @@
+#include "mapper/PoseUncertainty.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace rovermap::mapper {
+namespace {
+constexpr double kRadToDeg = 180.0 / M_PI;
+// χ² with 6 degrees of freedom at the probability of ±2σ in one dimension (0.9545).
+constexpr double kChi2Six2Sigma = 12.85;
+}  // namespace
+
+PoseSigmas SigmasOf(const ChainStep& step) {
+  const Eigen::Matrix3d R = step.T_world_body.linear();
+  const Eigen::Matrix3d position = R * step.covariance.bottomRightCorner<3, 3>() * R.transpose();
+  const Eigen::Matrix3d attitude_world = R * step.covariance.topLeftCorner<3, 3>() * R.transpose();
+  auto sd = [](double variance) { return std::sqrt(std::max(0.0, variance)); };
+  PoseSigmas s;
+  s.x_m = sd(position(0, 0));
+  s.y_m = sd(position(1, 1));
+  s.z_m = sd(position(2, 2));
+  s.roll_deg = sd(step.covariance(0, 0)) * kRadToDeg;
+  s.pitch_deg = sd(step.covariance(1, 1)) * kRadToDeg;
+  s.yaw_deg = sd(attitude_world(2, 2)) * kRadToDeg;
+  return s;
+}
+
+std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>& results) {
+  const FrameResult* first = nullptr;
+  std::vector<double> nees;
+  for (const FrameResult& r : results) {
+    if (!r.T_world_body_truth) continue;
+    if (first == nullptr) {
+      first = &r;
+      continue;
+    }
+    const Eigen::Isometry3d T_true =
+        first->step.T_world_body * first->T_world_body_truth->inverse() * *r.T_world_body_truth;
+    const Eigen::Isometry3d D = r.step.T_world_body.inverse() * T_true;
+    const Eigen::AngleAxisd aa(D.linear());
+    Eigen::Matrix<double, 6, 1> xi;
+    xi << aa.angle() * aa.axis(), D.translation();
+    const Eigen::LDLT<Matrix6d> ldlt(r.step.covariance);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
+    const double value = xi.dot(ldlt.solve(xi));
+    if (std::isfinite(value)) nees.push_back(value);
+  }
+  if (nees.empty()) return std::nullopt;
+  CalibrationCheck out;
+  out.frames = nees.size();
+  double sum = 0.0;
+  std::size_t within = 0;
+  for (const double v : nees) {
+    sum += v;
+    within += v <= kChi2Six2Sigma;
+  }
+  out.within_2sigma = static_cast<double>(within) / static_cast<double>(nees.size());
+  out.nees_mean = sum / static_cast<double>(nees.size());
+  std::nth_element(nees.begin(), nees.begin() + static_cast<long>(nees.size() / 2), nees.end());
+  out.nees_median = nees[nees.size() / 2];
+  return out;
+}
+
+}  // namespace rovermap::mapper
