@@ -95,7 +95,6 @@ double MedianSpread(const IndexedCloud& source, const std::vector<std::size_t>& 
 struct PoseSpread {
   double rotation_var_rad2 = 0.0;
   double translation_var_m2 = 0.0;
-  double max_radius_m = 0.0;  ///< the widened search radius stops here (0: no bound)
 
   bool Open() const { return rotation_var_rad2 > 0.0 || translation_var_m2 > 0.0; }
   /// Covariance of the displacement of the point p (target frame): δr × p + δt.
@@ -103,13 +102,13 @@ struct PoseSpread {
     return rotation_var_rad2 * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose()) +
            translation_var_m2 * Eigen::Matrix3d::Identity();
   }
-  /// The search radius for p: Dmax, widened to this many σ of p's displacement, but not beyond
-  /// max_radius_m.
+  /// The search radius for p: Dmax, widened to this many σ of p's displacement. Not bounded
+  /// by the initial Dmax: on KITTI that bound took a 0.8°/m seed's ATE from 1.09 to 1.62× the
+  /// truth-seeded one's (the far points it cut off are those that hold the heading).
   double Radius(const Eigen::Vector3d& p, double dmax, double sigmas) const {
     if (!Open()) return dmax;
-    double r = sigmas * std::sqrt(rotation_var_rad2 * p.squaredNorm() + translation_var_m2);
-    if (max_radius_m > 0.0) r = std::min(r, max_radius_m);
-    return std::max(dmax, r);
+    return std::max(dmax,
+                    sigmas * std::sqrt(rotation_var_rad2 * p.squaredNorm() + translation_var_m2));
   }
 };
 
@@ -521,9 +520,6 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   PoseSpread spread;  // the seed's uncertainty, shrunk step by step (SeedGate)
   spread.rotation_var_rad2 = std::pow(options.seed_rotation_sigma_deg * kDegToRad, 2);
   spread.translation_var_m2 = std::pow(options.seed_translation_sigma_m, 2);
-  // No farther than the paper's own first bound: beyond it a far point's nearest neighbour is
-  // rarely its own surface.
-  spread.max_radius_m = dmax;
   OrientationTest orientation_test(options);
   // Per-axis variance of the offset between two independent samplings of spacing D.
   const double sampling_variance = d_ref * d_ref / 12.0;
