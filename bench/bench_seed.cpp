@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "bench/BenchUtil.hpp"
+#include "bench/StereoVo.hpp"
 #include "config/Config.hpp"
 #include "eval/HeadingError.hpp"
 #include "eval/TrajectoryMetrics.hpp"
@@ -121,6 +122,9 @@ int main(int argc, char** argv) {
     }
 
     std::printf("\n%s, %zu frames\n\n", dir.c_str(), seq.frames.size());
+    std::optional<Poses> vo;
+    if (seq.info.sensor_type == io::SensorType::kStereo)
+      vo = bench::StereoVisualOdometry(dir, truth.front(), seq.frames.size());
     std::printf(
         "| seed | heading err/frame mean [deg] | RMS [deg] | final [deg] | ATE origin "
         "[m] | ATE [m] | ATE / GT-seeded | yaw from DR |\n|---|---|---|---|---|---|---|---|\n");
@@ -143,6 +147,7 @@ int main(int argc, char** argv) {
       if (s.name != "ground truth") PrintRow("  the seed itself", s.odometry, truth, 0.0);
       std::fflush(stdout);
     }
+    if (vo) PrintRow("peer: stereo visual odometry (GFTT, KLT, PnP RANSAC)", *vo, truth, reference_ate);
   }
   return 0;
 }
