@@ -17,7 +17,7 @@ struct MosaicOptions {
   // A correction is applied only when it passes all three tests below (else "refused").
   /// [ratio] directions with less information than this × the best's (rotations scaled to
   /// metres of arc over the overlap) are not corrected; refused if x, y or yaw is among them
-  double min_information = 1e-5;
+  double min_information = 2e-5;
   /// [ratio] the RMS height difference over the overlap must fall below this × its value before
   double min_improvement = 0.8;
   double max_correction_m = 2.0;    ///< [m] largest shift of the overlap's centre (start error)
