@@ -79,8 +79,9 @@ int RunMosaic(const MosaicArgs& args) {
   std::cout << mosaic::MosaicReportJson(result, cfg.mosaic);
   for (const mosaic::InputReport& input : result.inputs) {
     if (!input.reference && !input.applied && cfg.mosaic.coregister) {
+      const bool why = input.status == "refused" || input.status == "no_overlap";
       std::cerr << "rovermap: mosaic: " << input.file << ": placed as it is (" << input.status
-                << ")\n";
+                << (why ? ": " + input.reason : "") << ")\n";
     }
   }
   return kExitOk;
