@@ -57,7 +57,8 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args) {
       "mosaic.disagreement_sigma; nodata NaN. Config keys: mosaic.crs, mosaic.cell_size_m,\n"
       "mosaic.disagreement_sigma, mosaic.tile_cells, mosaic.coregister,\n"
       "mosaic.min_overlap_cells, mosaic.min_information, mosaic.min_improvement,\n"
-      "mosaic.max_correction_m, mosaic.max_correction_deg (and registration.* for co-registration).\n"
+      "mosaic.max_correction_m, mosaic.max_correction_deg (and registration.* for "
+      "co-registration).\n"
       "Prints mosaic.json on stdout.\n"
       "Exit status: 0 written, 1 bad or missing input file or cannot write, 2 usage or config\n"
       "error.\n");

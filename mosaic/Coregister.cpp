@@ -66,10 +66,10 @@ struct MatchGrid {
   std::vector<float> z;
   std::vector<float> sigma;
   std::vector<Eigen::Vector2f> offset;  // [m] of the block's data from the block's centre
-  Window window;                         // width and height in blocks
-  double cell_m = 0.0;                   // [m] block edge
-  bool partial_normals = false;          // normals of neighbourhoods with holes (GridNormal)
-  Eigen::Vector2d first_centre{0, 0};    // output CRS centre of block (0, 0)
+  Window window;                        // width and height in blocks
+  double cell_m = 0.0;                  // [m] block edge
+  bool partial_normals = false;         // normals of neighbourhoods with holes (GridNormal)
+  Eigen::Vector2d first_centre{0, 0};   // output CRS centre of block (0, 0)
 };
 
 // Per block, the inverse-variance mean height of its cells with data, at their weighted centre,
@@ -161,9 +161,9 @@ std::optional<Eigen::Vector3d> GridNormal(const std::vector<float>& z, const Win
     slope_y = gy * cell / sum_sq;
   } else {
     // The scatter of the cells about their mean, against a full window's 50 cells².
-    const Eigen::Matrix2d scatter = normal_eq.bottomRightCorner<2, 2>() -
-                                    normal_eq.block<2, 1>(1, 0) *
-                                        normal_eq.block<1, 2>(0, 1) / std::max(n, 1);
+    const Eigen::Matrix2d scatter =
+        normal_eq.bottomRightCorner<2, 2>() -
+        normal_eq.block<2, 1>(1, 0) * normal_eq.block<1, 2>(0, 1) / std::max(n, 1);
     if (n < 6 || Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvalues()(0) <
                      kMinSpread * 50.0)
       return std::nullopt;
@@ -312,17 +312,6 @@ std::string Figure(double value, int digits) {
 
 }  // namespace
 
-std::string DirectionNames(unsigned mask) {
-  static const char* const kNames[6] = {"roll", "pitch", "yaw", "x", "y", "z"};
-  std::string names;
-  for (int i = 0; i < 6; ++i) {
-    if ((mask & (1u << i)) == 0) continue;
-    if (!names.empty()) names += ' ';
-    names += kNames[i];
-  }
-  return names;
-}
-
 Constraint ConstrainDirections(const Matrix6d& information, double extent_m,
                                double min_information) {
   Constraint out;
@@ -360,7 +349,7 @@ std::string JudgeCorrection(unsigned unconstrained, double rms_before_m, double 
   std::string why;
   auto add = [&why](const std::string& text) { why += (why.empty() ? "" : "; ") + text; };
   if ((unconstrained & kHorizontal) != 0) {
-    add("ill-conditioned: " + DirectionNames(unconstrained & kHorizontal) +
+    add("ill-conditioned: " + registration::DirectionNames(unconstrained & kHorizontal) +
         " not constrained by the overlap");
   }
   if (!(rms_after_m < options.min_improvement * rms_before_m)) {
@@ -488,8 +477,7 @@ InputReport Coregister(std::vector<Input>& inputs, std::size_t index, const Outp
         }
         break;
       }
-      const Constraint found =
-          ConstrainDirections(information, extent_m, options.min_information);
+      const Constraint found = ConstrainDirections(information, extent_m, options.min_information);
       constraint = found;
       matched = true;
       report.inlier_ratio = result.inlier_ratio;
@@ -536,7 +524,7 @@ InputReport Coregister(std::vector<Input>& inputs, std::size_t index, const Outp
   report.rotation_deg = rotation.axis() * rotation.angle() * kRadToDeg;
   report.origin_m = origin;
   report.conditioning = kept_constraint.conditioning;
-  report.unconstrained = DirectionNames(kept_constraint.unconstrained);
+  report.unconstrained = registration::DirectionNames(kept_constraint.unconstrained);
   report.disagreement_after = kept_agreement.disagreeing;
   report.rms_after_m = kept_agreement.rms_m;
   report.reason =

@@ -8,6 +8,7 @@
 
 #include "mosaic/Mosaic.hpp"
 #include "mosaic/Warp.hpp"
+#include "registration/Directions.hpp"
 
 namespace rovermap::mosaic::detail {
 
@@ -23,29 +24,19 @@ InputReport Coregister(std::vector<Input>& inputs, std::size_t index, const Outp
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
-/// Directions of a correction in the output CRS about the overlap's centre: rotations about x
-/// (east: "roll"), y (north: "pitch") and z ("yaw"), then translations.
-enum Direction : unsigned {
-  kRoll = 1u << 0,
-  kPitch = 1u << 1,
-  kYaw = 1u << 2,
-  kX = 1u << 3,
-  kY = 1u << 4,
-  kZ = 1u << 5,
-};
-/// The horizontal placement co-registration exists to correct.
-constexpr unsigned kHorizontal = kYaw | kX | kY;
+// Directions (registration::Direction) of a correction here are in the output CRS about the
+// overlap's centre: rotations about x (east: "roll"), y (north: "pitch") and z ("yaw").
 
-/// "x y yaw" for a mask of Direction bits, in the order roll pitch yaw x y z; "" for none.
-std::string DirectionNames(unsigned mask);
+/// The horizontal placement co-registration exists to correct.
+constexpr unsigned kHorizontal = registration::kYaw | registration::kX | registration::kY;
 
 /// What a match's information (RegistrationResult: left perturbation [r (rad), t (m)]) says.
 struct Constraint {
   /// Keeps the constrained part of a step δ = [r, t]: the eigen-directions of the information
   /// (rotations scaled by extent_m) with at least min_information × the largest eigenvalue.
   Matrix6d projector = Matrix6d::Zero();
-  unsigned unconstrained = kRoll | kPitch | kYaw | kX | kY | kZ;  ///< one bit per weak direction
-  double conditioning = 0.0;  ///< smallest / largest eigenvalue, scaled
+  unsigned unconstrained = 0x3fu;  ///< registration::Direction bits of the weak directions
+  double conditioning = 0.0;       ///< smallest / largest eigenvalue, scaled
 };
 
 /// The constrained directions of `information`; a zero or non-finite one constrains none.

@@ -38,7 +38,7 @@ struct InputReport {
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  ///< [m] output CRS: the overlap's centre
   /// Smallest / largest eigenvalue of the last match's information (rotations in metres of arc)
   double conditioning = 0.0;
-  std::string unconstrained;  ///< directions the overlap does not constrain: not corrected
+  std::string unconstrained;      ///< directions the overlap does not constrain: not corrected
   std::size_t overlap_cells = 0;  ///< output cells both it and the mosaic before it cover
   double inlier_ratio = 0.0;      ///< the matcher's inliers / sampled points
   int iterations = 0;

@@ -460,8 +460,7 @@ TEST_F(MosaicTest, ACorrectionBeyondTheLimitsIsRefusedAndTheInputPlacedAsItIs) {
        "m exceeds mosaic.max_correction_m 0.10"},
       {[](mosaic::MosaicOptions* o) { o->max_correction_deg = 0.0; },
        "deg exceeds mosaic.max_correction_deg 0.00"},
-      {[](mosaic::MosaicOptions* o) { o->min_improvement = 0.1; },
-       "m RMS (needs < 0.10x)"},
+      {[](mosaic::MosaicOptions* o) { o->min_improvement = 0.1; }, "m RMS (needs < 0.10x)"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.reason);
@@ -496,8 +495,8 @@ TEST_F(MosaicTest, APlaneIsRefusedAsIllConditioned) {
     c.z += 0.1f;
     return c;
   });
-  const mosaic::MosaicResult result = Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif",
-                                            mosaic::MosaicOptions{}, /*report=*/true);
+  const mosaic::MosaicResult result =
+      Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif", mosaic::MosaicOptions{}, /*report=*/true);
   const mosaic::InputReport& b = result.inputs[1];
   EXPECT_TRUE(b.overlaps);
   EXPECT_FALSE(b.applied);
@@ -554,19 +553,17 @@ TEST(CoregisterGates, APlaneConstrainsHeightAndTiltOnly) {
   EXPECT_GT(relief.conditioning, 1e-4);
   EXPECT_TRUE(relief.projector.isIdentity(1e-9));
 
-  EXPECT_EQ(ConstrainDirections(mosaic::detail::Matrix6d::Zero(), 7.0, 2e-5).unconstrained,
-            0x3fu);
+  EXPECT_EQ(ConstrainDirections(mosaic::detail::Matrix6d::Zero(), 7.0, 2e-5).unconstrained, 0x3fu);
 }
 
 TEST(CoregisterGates, EachReasonNamesItsFiguresAndKey) {
   using mosaic::detail::JudgeCorrection;
   const mosaic::MosaicOptions o;  // 0.8x, 2 m, 5 deg
   EXPECT_EQ(JudgeCorrection(0, 0.102, 0.026, 0.5, 3.0, o), "");
-  EXPECT_EQ(JudgeCorrection(mosaic::detail::kYaw | mosaic::detail::kX, 0.102, 0.026, 0.5, 3.0, o),
+  EXPECT_EQ(JudgeCorrection(registration::kYaw | registration::kX, 0.102, 0.026, 0.5, 3.0, o),
             "ill-conditioned: yaw x not constrained by the overlap");
   // Roll and pitch alone are held at zero, not refused.
-  EXPECT_EQ(JudgeCorrection(mosaic::detail::kRoll | mosaic::detail::kPitch, 0.102, 0.026, 0.5,
-                            3.0, o),
+  EXPECT_EQ(JudgeCorrection(registration::kRoll | registration::kPitch, 0.102, 0.026, 0.5, 3.0, o),
             "");
   EXPECT_EQ(JudgeCorrection(0, 0.102, 0.091, 0.5, 3.0, o),
             "disagreement only 0.1020 -> 0.0910 m RMS (needs < 0.80x)");
@@ -575,14 +572,12 @@ TEST(CoregisterGates, EachReasonNamesItsFiguresAndKey) {
   EXPECT_EQ(JudgeCorrection(0, 0.102, 0.026, 0.5, 5.2, o),
             "correction 5.20 deg exceeds mosaic.max_correction_deg 5.00");
   // Every failed test is named, in that order.
-  EXPECT_EQ(JudgeCorrection(mosaic::detail::kY, 0.102, 0.2, 4.1, 83.7, o),
+  EXPECT_EQ(JudgeCorrection(registration::kY, 0.102, 0.2, 4.1, 83.7, o),
             "ill-conditioned: y not constrained by the overlap; disagreement only 0.1020 -> "
             "0.2000 m RMS (needs < 0.80x); correction 4.10 m exceeds mosaic.max_correction_m "
             "2.00; correction 83.70 deg exceeds mosaic.max_correction_deg 5.00");
   // A NaN figure never passes.
   EXPECT_NE(JudgeCorrection(0, 0.102, std::nan(""), 0.5, 3.0, o), "");
-  EXPECT_EQ(mosaic::detail::DirectionNames(0x3fu), "roll pitch yaw x y z");
-  EXPECT_EQ(mosaic::detail::DirectionNames(0u), "");
 }
 
 TEST_F(MosaicTest, AnInputWithoutOverlapIsPlacedAndFlagged) {
@@ -658,8 +653,8 @@ TEST_F(MosaicErrorTest, BadKeysAreConfigErrors) {
   for (const std::string set :
        {"mosaic.nope=1", "mosaic.cell_size_m=-1", "mosaic.disagreement_sigma=.nan",
         "mosaic.min_information=1", "mosaic.min_improvement=0", "mosaic.max_correction_m=-1",
-        "mosaic.max_correction_deg=.nan", "mosaic.tilt_sigma_deg=-0.1",
-        "mosaic.tile_cells=0", "mosaic.crs=EPSG:999999", "mosaic.crs=EPSG:4326"}) {
+        "mosaic.max_correction_deg=.nan", "mosaic.tilt_sigma_deg=-0.1", "mosaic.tile_cells=0",
+        "mosaic.crs=EPSG:999999", "mosaic.crs=EPSG:4326"}) {
     SCOPED_TRACE(set);
     const CommandResult r = Rovermap(base + set);
     EXPECT_EQ(r.status, 2) << r.err;

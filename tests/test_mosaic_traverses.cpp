@@ -200,11 +200,11 @@ TEST_F(MosaicTraverses, CoregistrationBringsThreeTraversesOntoTheTrueTerrain) {
 
 TEST_F(MosaicTraverses, AReturnTraverseOnASmallOverlapIsCorrectedWithoutATilt) {
   // A and B as above; the return traverse R started 0.5 m and 3 degrees off.
-  const std::vector<fs::path> dems = {
-      SimulateAndReplay(kTraverses[0]), SimulateAndReplay(kTraverses[1]),
-      SimulateAndReplay(kReturn, kCommon, [](const fs::path& seq) {
-        OffsetStart(seq, Eigen::Vector2d(0.3, 0.4), 3.0);
-      })};
+  const std::vector<fs::path> dems = {SimulateAndReplay(kTraverses[0]),
+                                      SimulateAndReplay(kTraverses[1]),
+                                      SimulateAndReplay(kReturn, kCommon, [](const fs::path& seq) {
+                                        OffsetStart(seq, Eigen::Vector2d(0.3, 0.4), 3.0);
+                                      })};
   ASSERT_FALSE(HasFailure());
   double best_single = 1e9;
   for (const fs::path& dem : dems) {
@@ -251,8 +251,9 @@ TEST_F(MosaicTraverses, ATraverseOverAPlaneIsRefusedWithItsReason) {
   // No relief in common: a flat terrain (no relief, rocks or craters); the second traverse
   // started 0.5 m and 3 degrees off, as above. Its overlap fixes its height and tilt, not
   // where on the plane it lies: the correction is refused and it is placed as it is.
-  const std::string flat = "--set sim.sensor=cloud --set sim.frames=24 --set sim.terrain_size_m=20 "
-                           "--set sim.rocks=0 --set sim.craters=0 --set sim.relief_m=0";
+  const std::string flat =
+      "--set sim.sensor=cloud --set sim.frames=24 --set sim.terrain_size_m=20 "
+      "--set sim.rocks=0 --set sim.craters=0 --set sim.relief_m=0";
   const std::vector<fs::path> dems = {
       SimulateAndReplay(kTraverses[0], flat),
       SimulateAndReplay(kTraverses[2], flat, [](const fs::path& seq) {
