@@ -25,8 +25,8 @@ constexpr int kMaxRounds = 8;
 constexpr int kMaxCoarseRounds = 4;
 constexpr double kRoundTranslationM = 5e-4;
 constexpr double kRoundRotationDeg = 1e-3;
-// A round whose RMS over the overlap rises above the lowest so far slid on a weak match (a small
-// overlap's rounds turned 35° after a good first one) and is undone; on the finest level a rise
+// A round whose RMS over the overlap rises above the lowest so far slid on a weak match (on a
+// small overlap, later rounds turned 35° and 45° more) and is undone; on the finest level a rise
 // below this ratio is the noise of resampling, and the rounds go on refining (a 20 cm shift
 // under 2 cm of noise: 19.1 cm when the first rise stopped them, 20.3 cm with them).
 constexpr double kMaxRiseRatio = 1.1;
