@@ -56,7 +56,9 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args) {
       "Bands: 1 elevation (m), 2 sigma (m), 3 summed point count, 4 inputs disagreeing beyond\n"
       "mosaic.disagreement_sigma; nodata NaN. Config keys: mosaic.crs, mosaic.cell_size_m,\n"
       "mosaic.disagreement_sigma, mosaic.tile_cells, mosaic.coregister,\n"
-      "mosaic.min_overlap_cells (and registration.* for co-registration).\n"
+      "mosaic.min_overlap_cells, mosaic.min_information, mosaic.min_improvement,\n"
+      "mosaic.max_correction_m, mosaic.max_correction_deg (and registration.* for "
+      "co-registration).\n"
       "Prints mosaic.json on stdout.\n"
       "Exit status: 0 written, 1 bad or missing input file or cannot write, 2 usage or config\n"
       "error.\n");
@@ -78,8 +80,9 @@ int RunMosaic(const MosaicArgs& args) {
   std::cout << mosaic::MosaicReportJson(result, cfg.mosaic);
   for (const mosaic::InputReport& input : result.inputs) {
     if (!input.reference && !input.applied && cfg.mosaic.coregister) {
+      const bool why = input.status == "refused" || input.status == "no_overlap";
       std::cerr << "rovermap: mosaic: " << input.file << ": placed as it is (" << input.status
-                << ")\n";
+                << (why ? ": " + input.reason : "") << ")\n";
     }
   }
   return kExitOk;

@@ -217,9 +217,9 @@ std::string CampaignSummaryJson(const CampaignLayout& layout, const CampaignPlan
       const std::string dem = (fs::path("traverses") / t.name / "dem.tif").string();
       for (const json& input : mosaic_report["inputs"]) {
         if (input.value("file", std::string()) == dem) {
-          placed = Pick(
-              input, {"status", "translation_m", "rotation_deg", "overlap_cells", "inlier_ratio",
-                      "disagreement_before", "disagreement_after", "rms_before_m", "rms_after_m"});
+          placed = Pick(input, {"status", "reason", "applied", "translation_m", "rotation_deg",
+                                "overlap_cells", "inlier_ratio", "disagreement_before",
+                                "disagreement_after", "rms_before_m", "rms_after_m"});
         }
       }
     }

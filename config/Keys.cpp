@@ -401,6 +401,18 @@ std::vector<KeyEntry> BuildRegistry() {
            "register each input onto the mosaic of those before it (point-to-plane)");
   mos.Int("min_overlap_cells", &MO::min_overlap_cells, "cells", AtLeast(3),
           "less overlap: the input is placed as it is and flagged");
+  mos.Double(
+      "min_information", &MO::min_information, "ratio", ClosedOpen(0, 1),
+      "directions with less information (of the best) are not corrected; x, y, yaw: refused");
+  mos.Double("min_improvement", &MO::min_improvement, "ratio", OpenClosed(0, 1),
+             "applied only if the overlap's RMS height difference falls below this x its value");
+  mos.Double("max_correction_m", &MO::max_correction_m, "m", AtLeast(0),
+             "applied only if it shifts the overlap's centre by at most this (start error)");
+  mos.Double("max_correction_deg", &MO::max_correction_deg, "deg", AtLeast(0),
+             "applied only if it turns by at most this (start heading error)");
+  mos.Double(
+      "tilt_sigma_deg", &MO::tilt_sigma_deg, "deg", AtLeast(0),
+      "sigma of the inputs' roll and pitch (gravity): a tilt is weighed against it; 0 = none");
 
   using CO = campaign::CampaignOptions;
   SectionKeys<CO> cam(keys, "campaign", &Config::campaign);

@@ -29,17 +29,6 @@ Eigen::Isometry3d ApplyLeft(const Vector6d& delta, const Eigen::Isometry3d& T) {
 
 }  // namespace
 
-std::string DirectionNames(unsigned mask) {
-  static const char* const kNames[6] = {"roll", "pitch", "yaw", "x", "y", "z"};
-  std::string names;
-  for (int i = 0; i < 6; ++i) {
-    if ((mask & (1u << i)) == 0) continue;
-    if (!names.empty()) names += ' ';
-    names += kNames[i];
-  }
-  return names;
-}
-
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 const Eigen::Isometry3d& T_registered, const Matrix6d& information,
                                 double extent_m, double min_information,

@@ -10,21 +10,19 @@
 #include <string>
 
 #include "mapper/PoseChain.hpp"  // Matrix6d
+#include "registration/Directions.hpp"
 
 namespace rovermap::mapper {
 
 /// Directions of an increment, in the registration's target frame (x forward, y left, z up).
-enum Direction : unsigned {
-  kRoll = 1u << 0,
-  kPitch = 1u << 1,
-  kYaw = 1u << 2,
-  kX = 1u << 3,
-  kY = 1u << 4,
-  kZ = 1u << 5,
-};
-
-/// "x y yaw" for a mask of Direction bits, in the order roll pitch yaw x y z; "" for none.
-std::string DirectionNames(unsigned mask);
+using registration::Direction;
+using registration::DirectionNames;
+using registration::kPitch;
+using registration::kRoll;
+using registration::kX;
+using registration::kY;
+using registration::kYaw;
+using registration::kZ;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 

@@ -50,6 +50,16 @@ void CheckOptions(const MosaicOptions& options) {
     fail("disagreement_sigma", "must be a finite number > 0");
   if (options.tile_cells < 16) fail("tile_cells", "must be >= 16");
   if (options.min_overlap_cells < 3) fail("min_overlap_cells", "must be >= 3");
+  if (!(options.min_information >= 0.0 && options.min_information < 1.0))
+    fail("min_information", "must be a number in [0, 1)");
+  if (!(options.min_improvement > 0.0 && options.min_improvement <= 1.0))
+    fail("min_improvement", "must be a number in (0, 1]");
+  if (!(std::isfinite(options.max_correction_m) && options.max_correction_m >= 0.0))
+    fail("max_correction_m", "must be a finite number >= 0");
+  if (!(std::isfinite(options.max_correction_deg) && options.max_correction_deg >= 0.0))
+    fail("max_correction_deg", "must be a finite number >= 0");
+  if (!(std::isfinite(options.tilt_sigma_deg) && options.tilt_sigma_deg >= 0.0))
+    fail("tilt_sigma_deg", "must be a finite number >= 0");
 }
 
 OGRSpatialReference OutputSrs(const MosaicOptions& options, const Input& first) {
@@ -418,10 +428,14 @@ InputReport InputReportFromJson(const nlohmann::json& j) {
   r.file = j.at("file").get<std::string>();
   r.reference = j.at("reference").get<bool>();
   r.status = j.at("status").get<std::string>();
+  r.reason = j.value("reason", std::string());
   r.overlaps = j.at("overlaps").get<bool>();
   r.applied = j.at("applied").get<bool>();
   r.translation_m = VectorFromJson(j.at("translation_m"));
   r.rotation_deg = VectorFromJson(j.at("rotation_deg"));
+  if (j.contains("origin_m")) r.origin_m = VectorFromJson(j.at("origin_m"));
+  r.conditioning = j.value("conditioning", 0.0);
+  r.unconstrained = j.value("unconstrained", std::string());
   r.overlap_cells = j.at("overlap_cells").get<std::size_t>();
   r.inlier_ratio = j.at("inlier_ratio").get<double>();
   r.iterations = j.at("iterations").get<int>();
@@ -597,10 +611,14 @@ std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& op
         {{"file", r.file},
          {"reference", r.reference},
          {"status", r.status},
+         {"reason", r.reason},
          {"overlaps", r.overlaps},
          {"applied", r.applied},
          {"translation_m", {r.translation_m.x(), r.translation_m.y(), r.translation_m.z()}},
          {"rotation_deg", {r.rotation_deg.x(), r.rotation_deg.y(), r.rotation_deg.z()}},
+         {"origin_m", {r.origin_m.x(), r.origin_m.y(), r.origin_m.z()}},
+         {"conditioning", r.conditioning},
+         {"unconstrained", r.unconstrained},
          {"overlap_cells", r.overlap_cells},
          {"inlier_ratio", r.inlier_ratio},
          {"iterations", r.iterations},
@@ -621,7 +639,12 @@ std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& op
                                 {"disagreement_sigma", options.disagreement_sigma},
                                 {"tile_cells", options.tile_cells},
                                 {"coregister", options.coregister},
-                                {"min_overlap_cells", options.min_overlap_cells}}},
+                                {"min_overlap_cells", options.min_overlap_cells},
+                                {"min_information", options.min_information},
+                                {"min_improvement", options.min_improvement},
+                                {"max_correction_m", options.max_correction_m},
+                                {"max_correction_deg", options.max_correction_deg},
+                                {"tilt_sigma_deg", options.tilt_sigma_deg}}},
                               {"inputs", inputs}};
   return out.dump(2) + "\n";
 }

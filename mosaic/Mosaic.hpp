@@ -29,16 +29,23 @@ struct InputReport {
   bool reference = false;  ///< the first input: the others are registered onto it and on
   bool overlaps = false;   ///< enough overlap with the inputs before it to register
   bool applied = false;    ///< a correction was applied
-  std::string status;      ///< "reference", "registered", "no_overlap", "failed: ...", "off"
+  /// "reference", "registered", "refused", "no_overlap", "failed: ...", "off"
+  std::string status;
+  std::string reason;  ///< why no correction was applied ("" when one was, and for the first)
+  /// The correction found, applied or not (`applied`), about `origin_m`
   Eigen::Vector3d translation_m = Eigen::Vector3d::Zero();  ///< [m] east, north, up
   Eigen::Vector3d rotation_deg = Eigen::Vector3d::Zero();   ///< [deg] rotation vector
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  ///< [m] output CRS: the overlap's centre
+  /// Smallest / largest eigenvalue of the last match's information (rotations in metres of arc)
+  double conditioning = 0.0;
+  std::string unconstrained;      ///< directions the overlap does not constrain: not corrected
   std::size_t overlap_cells = 0;  ///< output cells both it and the mosaic before it cover
   double inlier_ratio = 0.0;      ///< the matcher's inliers / sampled points
   int iterations = 0;
   std::size_t disagreement_before = 0;  ///< overlap cells beyond disagreement_sigma, uncorrected
   std::size_t disagreement_after = 0;   ///< the same after the correction
   double rms_before_m = 0.0;            ///< [m] RMS height difference over the overlap
-  double rms_after_m = 0.0;             ///< [m]
+  double rms_after_m = 0.0;             ///< [m] with the correction found
 };
 
 /// What was written.

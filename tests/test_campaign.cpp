@@ -69,8 +69,19 @@ TEST_F(Campaign, LocalRunReplaysEveryTraverseAndMosaicsTheOnesThatWorked) {
     EXPECT_EQ(t["frames"], 12);
     EXPECT_TRUE(t["ate_rmse_origin_m"]["registered"].is_number());
     EXPECT_TRUE(fs::exists(out / "traverses" / t["name"].get<std::string>() / "dem.tif"));
-    // The first is the mosaic's reference; the others were registered onto it.
-    EXPECT_EQ(t["mosaic"]["status"], t["name"] == "000-a" ? "reference" : "registered");
+    // The first is the mosaic's reference; the others were matched onto it, and a correction
+    // that hardly helps is refused with its reason (these 12-frame traverses already agree:
+    // 001-b's RMS over the overlap 0.0058 -> 0.0052 m, refused; 003-c registered).
+    if (t["name"] == "000-a") {
+      EXPECT_EQ(t["mosaic"]["status"], "reference");
+    } else if (t["mosaic"]["status"] == "refused") {
+      EXPECT_FALSE(t["mosaic"]["applied"].get<bool>());
+      EXPECT_TRUE(Contains(t["mosaic"]["reason"].get<std::string>(), "disagreement only"))
+          << t["mosaic"].dump();
+    } else {
+      EXPECT_EQ(t["mosaic"]["status"], "registered") << t["mosaic"].dump();
+      EXPECT_TRUE(t["mosaic"]["applied"].get<bool>());
+    }
   }
   EXPECT_EQ(summary["mosaic"]["status"], "ok");
   EXPECT_EQ(summary["mosaic"]["traverses"], 3);

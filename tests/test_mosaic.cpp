@@ -19,6 +19,7 @@
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
 #include "io/IoError.hpp"
+#include "mosaic/Coregister.hpp"
 #include "mosaic/Mosaic.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/DemDifference.hpp"
@@ -421,6 +422,11 @@ TEST_F(MosaicTest, CoregistrationCorrectsAKnownShift) {
   const double plain = rmse("plain.tif");
   const double coregistered = rmse("coreg.tif");
   RecordProperty("translation_x", std::to_string(b.translation_m.x()));
+  RecordProperty("translation_y", std::to_string(b.translation_m.y()));
+  RecordProperty("translation_z", std::to_string(b.translation_m.z()));
+  RecordProperty("rotation_deg", std::to_string(b.rotation_deg.norm()));
+  RecordProperty("rms_after_m", std::to_string(b.rms_after_m));
+  RecordProperty("disagreement_after", std::to_string(b.disagreement_after));
   RecordProperty("rmse_plain", std::to_string(plain));
   RecordProperty("rmse_coregistered", std::to_string(coregistered));
   // Measured: 0.064 -> 0.016 m.
@@ -428,6 +434,150 @@ TEST_F(MosaicTest, CoregistrationCorrectsAKnownShift) {
   const nlohmann::json report = nlohmann::json::parse(Slurp(dir_ / "mosaic.json"));
   EXPECT_EQ(report["inputs"][1]["status"], "registered");
   EXPECT_EQ(report["inputs"][0]["status"], "reference");
+}
+
+TEST_F(MosaicTest, ACorrectionBeyondTheLimitsIsRefusedAndTheInputPlacedAsItIs) {
+  // The known shift of CoregistrationCorrectsAKnownShift (0.2 m east, 0.1 m up; found with the
+  // RMS over the overlap 0.102 -> 0.026 m), judged by stricter limits.
+  const std::string crs = "EPSG:32633";
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  WriteDem(dir_ / "a.tif", 120, 120, NorthUp(500000, 4000030, 0.25), crs, [&](double x, double y) {
+    return Cell{float(Relief(x, y) + noise(rng)), 0.02f, 3.0f};
+  });
+  WriteDem(dir_ / "b.tif", 120, 120, NorthUp(500012, 4000030, 0.25), crs, [&](double x, double y) {
+    return Cell{float(Relief(x - 0.2, y) + 0.1 + noise(rng)), 0.02f, 3.0f};
+  });
+  const std::vector<fs::path> inputs = {dir_ / "a.tif", dir_ / "b.tif"};
+  Build(inputs, "plain.tif", NoCoregistration());
+  const io::DemRaster plain = Read("plain.tif");
+  struct Case {
+    std::function<void(mosaic::MosaicOptions*)> set;
+    std::string reason;
+  };
+  const std::vector<Case> cases = {
+      {[](mosaic::MosaicOptions* o) { o->max_correction_m = 0.1; },
+       "m exceeds mosaic.max_correction_m 0.10"},
+      {[](mosaic::MosaicOptions* o) { o->max_correction_deg = 0.0; },
+       "deg exceeds mosaic.max_correction_deg 0.00"},
+      {[](mosaic::MosaicOptions* o) { o->min_improvement = 0.1; }, "m RMS (needs < 0.10x)"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.reason);
+    mosaic::MosaicOptions options;
+    c.set(&options);
+    const mosaic::MosaicResult result = Build(inputs, "refused.tif", options, /*report=*/true);
+    const mosaic::InputReport& b = result.inputs[1];
+    EXPECT_EQ(b.status, "refused");
+    EXPECT_FALSE(b.applied);
+    EXPECT_NE(b.reason.find(c.reason), std::string::npos) << b.reason;
+    // The correction found is still reported, with its figures.
+    EXPECT_NEAR(b.translation_m.x(), -0.2, 0.01);
+    EXPECT_LT(b.rms_after_m, 0.03);
+    const nlohmann::json report = nlohmann::json::parse(Slurp(dir_ / "mosaic.json"));
+    EXPECT_EQ(report["inputs"][1]["reason"], b.reason);
+    // Placed as it is: the mosaic is the one without co-registration.
+    const testing::DemDifference d = testing::CompareDemCells(plain, Read("refused.tif"));
+    EXPECT_EQ(d.nan_mismatches, 0u);
+    EXPECT_EQ(d.worst_z_m, 0.0);
+    fs::remove(dir_ / "refused.tif");
+  }
+}
+
+TEST_F(MosaicTest, APlaneIsRefusedAsIllConditioned) {
+  // Two DEMs of one plane, B displaced by 0.3 m east and 0.1 m up: the overlap constrains its
+  // height and tilt, never where along the plane it lies.
+  const std::string crs = "EPSG:32633";
+  const Surface plane = Plane(0.02f);
+  WriteDem(dir_ / "a.tif", 60, 60, NorthUp(500000, 4000030, 0.5), crs, plane);
+  WriteDem(dir_ / "b.tif", 60, 60, NorthUp(500012, 4000030, 0.5), crs, [&](double x, double y) {
+    Cell c = plane(x - 0.3, y);
+    c.z += 0.1f;
+    return c;
+  });
+  const mosaic::MosaicResult result =
+      Build({dir_ / "a.tif", dir_ / "b.tif"}, "m.tif", mosaic::MosaicOptions{}, /*report=*/true);
+  const mosaic::InputReport& b = result.inputs[1];
+  EXPECT_TRUE(b.overlaps);
+  EXPECT_FALSE(b.applied);
+  EXPECT_EQ(b.status, "refused");
+  EXPECT_EQ(b.unconstrained, "yaw x y");
+  EXPECT_EQ(b.reason, "ill-conditioned: yaw x y not constrained by the overlap") << b.reason;
+  const nlohmann::json report = nlohmann::json::parse(Slurp(dir_ / "mosaic.json"));
+  EXPECT_EQ(report["inputs"][1]["status"], "refused");
+  EXPECT_EQ(report["inputs"][1]["reason"], b.reason);
+  EXPECT_EQ(report["inputs"][1]["unconstrained"], "yaw x y");
+}
+
+// ---- the gates, alone -------------------------------------------------------------------
+
+// The information of a point-to-plane match over a grid of points on z = f(x, y) (2 cm σ).
+mosaic::detail::Matrix6d GridInformation(const std::function<double(double, double)>& f) {
+  mosaic::detail::Matrix6d information = mosaic::detail::Matrix6d::Zero();
+  constexpr double h = 0.01;
+  for (double x = -5.0; x <= 5.0; x += 0.25) {
+    for (double y = -5.0; y <= 5.0; y += 0.25) {
+      const Eigen::Vector3d p(x, y, f(x, y));
+      const Eigen::Vector3d n = Eigen::Vector3d((f(x - h, y) - f(x + h, y)) / (2 * h),
+                                                (f(x, y - h) - f(x, y + h)) / (2 * h), 1.0)
+                                    .normalized();
+      Eigen::Matrix<double, 6, 1> j;
+      j << p.cross(n), n;
+      information += j * j.transpose() / (0.02 * 0.02);
+    }
+  }
+  return information;
+}
+
+TEST(CoregisterGates, APlaneConstrainsHeightAndTiltOnly) {
+  using mosaic::detail::ConstrainDirections;
+  const auto plane = ConstrainDirections(
+      GridInformation([](double x, double y) { return 0.02 * x - 0.01 * y; }), 7.0, 2e-5);
+  EXPECT_EQ(plane.unconstrained, mosaic::detail::kHorizontal);
+  EXPECT_LT(plane.conditioning, 1e-12);
+  // Kept directions pass a step unchanged, the others are dropped.
+  Eigen::Matrix<double, 6, 1> step;
+  step << 0.0, 0.0, 0.05, 0.3, 0.2, 0.1;  // yaw, x, y (along the plane) and z
+  const Eigen::Matrix<double, 6, 1> kept = plane.projector * step;
+  // Yaw about z is a turn about the normal (dropped) and a hair of tilt (kept: 2.5e-5 rad).
+  EXPECT_NEAR(kept(2), 0.0, 1e-4);
+  // Of the shift (0.3, 0.2, 0.1), the part along the plane's normal is kept…
+  const Eigen::Vector3d n = Eigen::Vector3d(-0.02, 0.01, 1.0).normalized();
+  EXPECT_NEAR(kept.tail<3>().dot(n), step.tail<3>().dot(n), 1e-9);
+  EXPECT_NEAR(kept.tail<3>().cross(n).norm(), 0.0, 1e-9);  // … and nothing along it
+
+  const auto relief = ConstrainDirections(
+      GridInformation([](double x, double y) { return Relief(500000 + x, 4000000 + y); }), 7.0,
+      2e-5);
+  EXPECT_EQ(relief.unconstrained, 0u);
+  EXPECT_GT(relief.conditioning, 1e-4);
+  EXPECT_TRUE(relief.projector.isIdentity(1e-9));
+
+  EXPECT_EQ(ConstrainDirections(mosaic::detail::Matrix6d::Zero(), 7.0, 2e-5).unconstrained, 0x3fu);
+}
+
+TEST(CoregisterGates, EachReasonNamesItsFiguresAndKey) {
+  using mosaic::detail::JudgeCorrection;
+  const mosaic::MosaicOptions o;  // 0.8x, 2 m, 5 deg
+  EXPECT_EQ(JudgeCorrection(0, 0.102, 0.026, 0.5, 3.0, o), "");
+  EXPECT_EQ(JudgeCorrection(registration::kYaw | registration::kX, 0.102, 0.026, 0.5, 3.0, o),
+            "ill-conditioned: yaw x not constrained by the overlap");
+  // Roll and pitch alone are held at zero, not refused.
+  EXPECT_EQ(JudgeCorrection(registration::kRoll | registration::kPitch, 0.102, 0.026, 0.5, 3.0, o),
+            "");
+  EXPECT_EQ(JudgeCorrection(0, 0.102, 0.091, 0.5, 3.0, o),
+            "disagreement only 0.1020 -> 0.0910 m RMS (needs < 0.80x)");
+  EXPECT_EQ(JudgeCorrection(0, 0.102, 0.026, 2.5, 3.0, o),
+            "correction 2.50 m exceeds mosaic.max_correction_m 2.00");
+  EXPECT_EQ(JudgeCorrection(0, 0.102, 0.026, 0.5, 5.2, o),
+            "correction 5.20 deg exceeds mosaic.max_correction_deg 5.00");
+  // Every failed test is named, in that order.
+  EXPECT_EQ(JudgeCorrection(registration::kY, 0.102, 0.2, 4.1, 83.7, o),
+            "ill-conditioned: y not constrained by the overlap; disagreement only 0.1020 -> "
+            "0.2000 m RMS (needs < 0.80x); correction 4.10 m exceeds mosaic.max_correction_m "
+            "2.00; correction 83.70 deg exceeds mosaic.max_correction_deg 5.00");
+  // A NaN figure never passes.
+  EXPECT_NE(JudgeCorrection(0, 0.102, std::nan(""), 0.5, 3.0, o), "");
 }
 
 TEST_F(MosaicTest, AnInputWithoutOverlapIsPlacedAndFlagged) {
@@ -502,7 +652,9 @@ TEST_F(MosaicErrorTest, BadKeysAreConfigErrors) {
       "mosaic " + (dir_ / "a.tif").string() + " --out " + (dir_ / "m.tif").string() + " --set ";
   for (const std::string set :
        {"mosaic.nope=1", "mosaic.cell_size_m=-1", "mosaic.disagreement_sigma=.nan",
-        "mosaic.tile_cells=0", "mosaic.crs=EPSG:999999", "mosaic.crs=EPSG:4326"}) {
+        "mosaic.min_information=1", "mosaic.min_improvement=0", "mosaic.max_correction_m=-1",
+        "mosaic.max_correction_deg=.nan", "mosaic.tilt_sigma_deg=-0.1", "mosaic.tile_cells=0",
+        "mosaic.crs=EPSG:999999", "mosaic.crs=EPSG:4326"}) {
     SCOPED_TRACE(set);
     const CommandResult r = Rovermap(base + set);
     EXPECT_EQ(r.status, 2) << r.err;
@@ -630,12 +782,18 @@ TEST_F(MosaicOfReplayDems, CoregistrationAcrossZones) {
   // Zone 32's grid is turned by 4.24 degrees (the convergence at 12° E, 45° N, twice) against
   // zone 33's: the 0.2 m east shift reads as (-0.1995, -0.0148) m there. Measured:
   // (-0.1996, -0.0149, -0.1000) m; RMS over the overlap 0.098 -> 0.0009 m.
+  RecordProperty("translation_x", std::to_string(b.translation_m.x()));
+  RecordProperty("translation_y", std::to_string(b.translation_m.y()));
+  RecordProperty("translation_z", std::to_string(b.translation_m.z()));
+  RecordProperty("rms_after_m", std::to_string(b.rms_after_m));
   EXPECT_NEAR(b.translation_m.x(), -0.1995, 0.002);
   EXPECT_NEAR(b.translation_m.y(), -0.0148, 0.002);
   EXPECT_NEAR(b.translation_m.z(), -0.1, 0.002);
   EXPECT_LT(b.rms_after_m, 0.005);
   const double plain = rmse("plain.tif");
   const double coregistered = rmse("coreg.tif");
+  RecordProperty("rmse_plain", std::to_string(plain));
+  RecordProperty("rmse_coregistered", std::to_string(coregistered));
   EXPECT_LT(coregistered, 0.1 * plain);  // measured 0.064 -> 0.0014 m
 }
 
