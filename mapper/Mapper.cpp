@@ -1,6 +1,8 @@
 #include "mapper/Mapper.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -150,7 +152,7 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
-  Fuse(source->cloud(), isolated.keep, r.step, &r);
+  Fuse(source->cloud(), isolated.keep, loaded.fill, r.step, &r);
 
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
@@ -367,7 +369,8 @@ Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
 }
 
 void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
-                  const ChainStep& step, FrameResult* result) {
+                  const registration::PointCloud& fill, const ChainStep& step,
+                  FrameResult* result) {
   const auto dem_start = Clock::now();
   const Eigen::Isometry3d& T = step.T_world_body;
   std::vector<Eigen::Vector3d> points_world;
@@ -384,6 +387,22 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
     if (has_cov) covariances.push_back(cloud.covariances[i]);
     if (has_normals) normals.push_back(cloud.normals[i]);
   }
+  // The DEM's fill points go with the frame's own (one FuseFrame: a cell's points of one frame
+  // weigh as one), not into the OctoMap, and only into cells that no measured point of this
+  // frame reached: they close the gaps between the rows and leave measured cells alone.
+  const std::size_t measured = points_world.size();
+  if ((fill.HasCovariances() || !has_cov) && (fill.HasNormals() || !has_normals)) {
+    const std::vector<std::pair<std::int64_t, std::int64_t>> reached = SortedCells(points_world);
+    for (std::size_t i = 0; i < fill.size(); ++i) {
+      const Eigen::Vector3d p = T * fill.points[i];
+      const auto cell = elevation_map_.WorldToCell(p.x(), p.y());
+      if (cell && std::binary_search(reached.begin(), reached.end(), std::pair{cell->x, cell->y}))
+        continue;
+      points_world.push_back(p);
+      if (has_cov) covariances.push_back(fill.covariances[i]);
+      if (has_normals) normals.push_back(fill.normals[i]);
+    }
+  }
   dem::FrameContext ctx;
   ctx.frame = static_cast<std::uint32_t>(step.index);
   ctx.R_world_cov = T.linear();  // the covariances are in the body frame
@@ -399,8 +418,21 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   result->time.fuse_dem_ms = MsSince(dem_start);
 
   const auto octomap_start = Clock::now();
+  points_world.resize(measured);
   octomap_.Insert(std::move(points_world), ctx.sensor_origin_world);
   result->time.fuse_octomap_ms = MsSince(octomap_start);
+}
+
+std::vector<std::pair<std::int64_t, std::int64_t>> Mapper::SortedCells(
+    const std::vector<Eigen::Vector3d>& points_world) const {
+  std::vector<std::pair<std::int64_t, std::int64_t>> cells;
+  cells.reserve(points_world.size());
+  for (const Eigen::Vector3d& p : points_world) {
+    if (const auto cell = elevation_map_.WorldToCell(p.x(), p.y())) cells.emplace_back(cell->x, cell->y);
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
 }
 
 void Mapper::KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud,
