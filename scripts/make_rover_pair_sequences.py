@@ -208,17 +208,21 @@ def ReadErfoudPoses(path):
     return rows
 
 
+def Begin(source_dir, out_dir, frame_pairs, other_files):
+    """Checks the source files used, copies the license; returns the fresh frames/ folder."""
+    CheckSums(source_dir, [p for pair in frame_pairs for p in pair] + other_files + ["LICENSE.md"])
+    os.makedirs(out_dir, exist_ok=True)
+    shutil.copyfile(os.path.join(source_dir, "LICENSE.md"), os.path.join(out_dir, "LICENSE.md"))
+    return FreshFrames(out_dir)
+
+
 def MakeErfoud(shared, out_root):
     src = os.path.join(shared, ERFOUD_SOURCE)
     out = os.path.join(out_root, "rover_erfoud_minnie")
-    used = [p for pair in ERFOUD_FRAMES for p in pair] + ["poses_derived.txt", "LICENSE.md"]
-    CheckSums(src, used)
-    os.makedirs(out, exist_ok=True)
-    frames = FreshFrames(out)
+    frames = Begin(src, out, ERFOUD_FRAMES, ["poses_derived.txt"])
     for k, (left, right) in enumerate(ERFOUD_FRAMES):
         shutil.copyfile(os.path.join(src, left), os.path.join(frames, "%06d.left.png" % k))
         shutil.copyfile(os.path.join(src, right), os.path.join(frames, "%06d.right.png" % k))
-    shutil.copyfile(os.path.join(src, "LICENSE.md"), os.path.join(out, "LICENSE.md"))
     poses = ReadErfoudPoses(os.path.join(src, "poses_derived.txt"))
     cam = poses["L"]  # left camera in the body frame: tx ty tz qx qy qz qw
     norm = sum(v * v for v in cam[3:]) ** 0.5
@@ -268,10 +272,7 @@ def BodyFromGroundNormal(normal_camera):
 def MakeDevon(shared, out_root):
     src = os.path.join(shared, DEVON_SOURCE)
     out = os.path.join(out_root, "rover_devon_island")
-    used = [p for pair in DEVON_FRAMES for p in pair] + ["calib/CameraCalibration", "LICENSE.md"]
-    CheckSums(src, used)
-    os.makedirs(out, exist_ok=True)
-    frames = FreshFrames(out)
+    frames = Begin(src, out, DEVON_FRAMES, ["calib/CameraCalibration"])
     for k, pair in enumerate(DEVON_FRAMES):
         for side, rel in zip(("left", "right"), pair):
             w, h, rgb = ReadPpm(os.path.join(src, rel))
@@ -279,7 +280,6 @@ def MakeDevon(shared, out_root):
             if (w2, h2) != (DEVON_CAMERA["width"], DEVON_CAMERA["height"]):
                 sys.exit(f"{rel}: unexpected size {w}x{h}")
             WriteGreyPng(os.path.join(frames, "%06d.%s.png" % (k, side)), w2, h2, grey)
-    shutil.copyfile(os.path.join(src, "LICENSE.md"), os.path.join(out, "LICENSE.md"))
     WriteText(os.path.join(out, "sequence.yaml"),
               "# Two real rover stereo frames (UTIAS/ASRL Devon Island dataset via InFuse), written\n"
               "# by scripts/make_rover_pair_sequences.py: DESIGN.md section 4. Camera: the rectified\n"

@@ -16,9 +16,9 @@
 #include <utility>
 #include <vector>
 
-#include "config/Config.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
+#include "tests/support/PipelineDefaults.hpp"
 
 namespace fs = std::filesystem;
 using namespace rovermap;
@@ -28,8 +28,7 @@ namespace {
 const fs::path kData = ROVERMAP_DATASETS_DIR;
 
 mapper::PipelineOptions Defaults() {
-  const config::Config c;
-  mapper::PipelineOptions o{c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+  mapper::PipelineOptions o = rovermap::testing::PipelineDefaults();
   o.octomap.enabled = false;  // not measured here
   return o;
 }
