@@ -1,8 +1,6 @@
 #include "mapper/Mapper.hpp"
 
-#include <algorithm>
 #include <chrono>
-#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -389,22 +387,19 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   }
   // The DEM's fill points go with the frame's own (one FuseFrame: a cell's points of one frame
   // weigh as one), not into the OctoMap, and only into cells that no measured point of this
-  // frame reached: they close the gaps between the rows and leave measured cells alone.
+  // frame reached (FrameContext::fill_from): they close the gaps between the rows and leave
+  // measured cells to their measurements. They carry what the cloud carries, or are left out.
   const std::size_t measured = points_world.size();
   if ((fill.HasCovariances() || !has_cov) && (fill.HasNormals() || !has_normals)) {
-    const std::vector<std::pair<std::int64_t, std::int64_t>> reached = SortedCells(points_world);
     for (std::size_t i = 0; i < fill.size(); ++i) {
-      const Eigen::Vector3d p = T * fill.points[i];
-      const auto cell = elevation_map_.WorldToCell(p.x(), p.y());
-      if (cell && std::binary_search(reached.begin(), reached.end(), std::pair{cell->x, cell->y}))
-        continue;
-      points_world.push_back(p);
+      points_world.push_back(T * fill.points[i]);
       if (has_cov) covariances.push_back(fill.covariances[i]);
       if (has_normals) normals.push_back(fill.normals[i]);
     }
   }
   dem::FrameContext ctx;
   ctx.frame = static_cast<std::uint32_t>(step.index);
+  ctx.fill_from = measured;
   ctx.R_world_cov = T.linear();  // the covariances are in the body frame
   ctx.sensor_origin_world = T * sensor_.T_body_sensor.translation();
   // The chain's covariance is a right perturbation of T_world_body; FuseFrame wants a left one
@@ -421,18 +416,6 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   points_world.resize(measured);
   octomap_.Insert(std::move(points_world), ctx.sensor_origin_world);
   result->time.fuse_octomap_ms = MsSince(octomap_start);
-}
-
-std::vector<std::pair<std::int64_t, std::int64_t>> Mapper::SortedCells(
-    const std::vector<Eigen::Vector3d>& points_world) const {
-  std::vector<std::pair<std::int64_t, std::int64_t>> cells;
-  cells.reserve(points_world.size());
-  for (const Eigen::Vector3d& p : points_world) {
-    if (const auto cell = elevation_map_.WorldToCell(p.x(), p.y())) cells.emplace_back(cell->x, cell->y);
-  }
-  std::sort(cells.begin(), cells.end());
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  return cells;
 }
 
 void Mapper::KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud,

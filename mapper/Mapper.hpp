@@ -5,12 +5,10 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
-#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
@@ -193,9 +191,6 @@ class Mapper {
   }
   void Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
             const registration::PointCloud& fill, const ChainStep& step, FrameResult* result);
-  // The distinct DEM cells of `points_world` (x, y), sorted.
-  std::vector<std::pair<std::int64_t, std::int64_t>> SortedCells(
-      const std::vector<Eigen::Vector3d>& points_world) const;
   void KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud, const ChainStep& step,
                        double reference_distance_m);
 
