@@ -172,7 +172,8 @@ class CellSet {
     }
     width_ = static_cast<std::uint64_t>(x1_ - x0_) + 1;
     const auto height = static_cast<std::uint64_t>(y1_ - y0_) + 1;
-    const std::uint64_t max_dense = std::max<std::uint64_t>(std::uint64_t{1} << 22, 8 * cells.size());
+    const std::uint64_t max_dense =
+        std::max<std::uint64_t>(std::uint64_t{1} << 22, 8 * cells.size());
     if (width_ <= max_dense && height <= max_dense / width_) {
       dense_.assign(width_ * height, 0);
       for (const CellIndex& c : cells) dense_[Offset(c)] = 1;

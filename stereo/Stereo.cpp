@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <utility>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 #include <vector>
 
 #include "registration/VoxelGrid.hpp"
@@ -123,13 +123,14 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
         // step is mostly error), beyond the disparity noise of either.
         const double sigma_d = std::hypot(o.disparity_sigma_px, 0.5 * step);
         const double gap = (q - p).norm();
-        const int n = std::min(kMaxFillPerPair, static_cast<int>(std::ceil(gap / o.fill_spacing_m)) - 1);
+        const int n =
+            std::min(kMaxFillPerPair, static_cast<int>(std::ceil(gap / o.fill_spacing_m)) - 1);
         for (int k = 1; k <= n; ++k) {
           const double t = static_cast<double>(k) / (n + 1);
           const Eigen::Vector3d x = p + t * (q - p);
           fill->points.push_back(T_body_sensor * x);
-          fill->covariances.push_back(
-              R * PointCovariance(x, camera, sigma_d, o.pixel_sigma_px) * R.transpose());
+          fill->covariances.push_back(R * PointCovariance(x, camera, sigma_d, o.pixel_sigma_px) *
+                                      R.transpose());
           if (normals) {
             const int nearer = t < 0.5 ? point_of[i] : point_of[j];
             fill->normals.push_back(cloud.normals[static_cast<std::size_t>(nearer)]);

@@ -107,7 +107,8 @@ struct Region {
 Coverage Measure(const Replayed& run, const Region& region) {
   const dem::ElevationMap& map = run.mapper->elevation_map();
   std::vector<Eigen::Vector2d> path;
-  for (const auto& r : run.mapper->results()) path.push_back(r.step.T_world_body.translation().head<2>());
+  for (const auto& r : run.mapper->results())
+    path.push_back(r.step.T_world_body.translation().head<2>());
   const Eigen::Isometry3d& first = run.mapper->results().front().step.T_world_body;
   const Eigen::Vector2d heading = first.linear().col(0).head<2>().normalized();
   double length_m = 0.0;
@@ -127,8 +128,8 @@ Coverage Measure(const Replayed& run, const Region& region) {
     for (const auto& t : path) nearest = std::min(nearest, (p - t).norm());
     const Eigen::Vector2d d = p - path.front();
     const double ahead = d.dot(heading);
-    if (nearest > region.radius_m || std::abs(d.x() * heading.y() - d.y() * heading.x()) >
-                                         region.max_lateral_m) {
+    if (nearest > region.radius_m ||
+        std::abs(d.x() * heading.y() - d.y() * heading.x()) > region.max_lateral_m) {
       continue;
     }
     const auto value = map.Cell(cell);
@@ -179,9 +180,7 @@ void ExpectNoBands(const fs::path& sequence) {
 TEST(DemCoverage, ErfoudRoverPairHasNoBands) { ExpectNoBands(kData / "rover_erfoud_minnie"); }
 
 // Measured: 0.934, 0.924, 0.049 against 0.923, 0.813, 0.394.
-TEST(DemCoverage, DevonIslandRoverPairHasNoBands) {
-  ExpectNoBands(kData / "rover_devon_island");
-}
+TEST(DemCoverage, DevonIslandRoverPairHasNoBands) { ExpectNoBands(kData / "rover_devon_island"); }
 
 TEST(DemCoverage, KittiRoadHasNoBands) {
   // Eight frames (8.4 m); the road: cells within 3 m of the path's line, reached by two frames
