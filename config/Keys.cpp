@@ -146,6 +146,10 @@ std::vector<KeyEntry> BuildRegistry() {
   st.Int("normal_step_px", &S::normal_step_px, "px", AtLeast(1), "neighbour offset for normals");
   st.Double("normal_max_depth_jump", &S::normal_max_depth_jump, "ratio", GreaterThan(0),
             "depth edge: |dz| / z per pixel of step");
+  st.Double("fill_spacing_m", &S::fill_spacing_m, "m", AtLeast(0),
+            "DEM only: points between neighbouring pixels this far apart; 0 = off");
+  st.Double("fill_max_step_px", &S::fill_max_step_px, "px", AtLeast(0),
+            "DEM fill: larger disparity steps are edges, not joined");
   st.Double("voxel_size_m", &S::voxel_size_m, "m", AtLeast(0), "voxel downsampling; 0 = off");
 
   using M = sim::SimOptions;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -155,6 +156,51 @@ std::vector<std::uint32_t> CountPerCell(const std::vector<CellIndex>& cells) {
   return counts;
 }
 
+namespace {
+
+// Which cells a frame's measured points reach: a dense mask over their bounding box when it is
+// small (CountPerCell's reasoning), a sorted list otherwise.
+class CellSet {
+ public:
+  explicit CellSet(const std::vector<CellIndex>& cells) {
+    if (cells.empty()) return;
+    x0_ = x1_ = cells[0].x;
+    y0_ = y1_ = cells[0].y;
+    for (const CellIndex& c : cells) {
+      x0_ = std::min(x0_, c.x), x1_ = std::max(x1_, c.x);
+      y0_ = std::min(y0_, c.y), y1_ = std::max(y1_, c.y);
+    }
+    width_ = static_cast<std::uint64_t>(x1_ - x0_) + 1;
+    const auto height = static_cast<std::uint64_t>(y1_ - y0_) + 1;
+    const std::uint64_t max_dense =
+        std::max<std::uint64_t>(std::uint64_t{1} << 22, 8 * cells.size());
+    if (width_ <= max_dense && height <= max_dense / width_) {
+      dense_.assign(width_ * height, 0);
+      for (const CellIndex& c : cells) dense_[Offset(c)] = 1;
+    } else {
+      for (const CellIndex& c : cells) sorted_.emplace_back(c.x, c.y);
+      std::sort(sorted_.begin(), sorted_.end());
+    }
+  }
+  bool Contains(const CellIndex& c) const {
+    if (!dense_.empty()) {
+      return c.x >= x0_ && c.x <= x1_ && c.y >= y0_ && c.y <= y1_ && dense_[Offset(c)] != 0;
+    }
+    return std::binary_search(sorted_.begin(), sorted_.end(), std::pair{c.x, c.y});
+  }
+
+ private:
+  std::uint64_t Offset(const CellIndex& c) const {
+    return static_cast<std::uint64_t>(c.y - y0_) * width_ + static_cast<std::uint64_t>(c.x - x0_);
+  }
+  std::int64_t x0_ = 0, x1_ = -1, y0_ = 0, y1_ = -1;
+  std::uint64_t width_ = 0;
+  std::vector<std::uint8_t> dense_;
+  std::vector<std::pair<std::int64_t, std::int64_t>> sorted_;
+};
+
+}  // namespace
+
 bool ElevationMap::WithinGate(double h, double p, double z, double r) const {
   const double d = z - h;
   return d * d <= options_.mahalanobis_gate * (p + r);
@@ -275,8 +321,18 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   std::vector<CellIndex> cells;
   fusable.reserve(n);
   cells.reserve(n);
+  std::optional<CellSet> measured;  // the cells of the points before ctx.fill_from
+  std::size_t fill_skipped = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector3d& p = points_world[k];
+    if (k >= ctx.fill_from) {
+      if (!measured) measured.emplace(cells);
+      const auto cell = WorldToCell(p.x(), p.y());
+      if (!cell || measured->Contains(*cell)) {
+        ++fill_skipped;
+        continue;
+      }
+    }
     if (limit_h) {
       // Largest eigenvalue of the 2×2 horizontal covariance.
       const Eigen::Matrix2d h = horizontal * covariances[k] * horizontal.transpose();
@@ -319,6 +375,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
     const double m = counts.empty() ? 1.0 : static_cast<double>(counts[i]);
     FuseAt(cells[i], points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats);
   }
+  stats.points -= fill_skipped;
   return stats;
 }
 

@@ -164,6 +164,10 @@ struct FrameContext {
   /// Optional unit surface normals, one per point, in the covariances' frame (rotated by
   /// R_world_cov into the world); their sign does not matter. See slope_aware_variance.
   const std::vector<Eigen::Vector3d>* normals = nullptr;
+  /// Points from this index on are fill between measured ones (stereo::StereoPointsResult::
+  /// fill): each is fused only into a cell that none of the points before this index reach,
+  /// else skipped and not counted in FusionStats (it measures nothing there). Default: none.
+  std::size_t fill_from = std::numeric_limits<std::size_t>::max();
 };
 
 /// For each of `cells`, how many of `cells` are the same cell (a frame's points per cell).

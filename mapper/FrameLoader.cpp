@@ -76,6 +76,8 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     }
     out.input_points = points.pixels;
     out.cloud = std::move(points.cloud);
+    out.fill = std::move(points.fill);
+    DropNonFinite(&out.fill);
   } else {
     out.input_points = frame.cloud.size();
     out.cloud = frame.cloud;

@@ -27,6 +27,8 @@ struct LoadedFrame {
   bool ok = false;
   std::string reason;                 ///< why not ok ("stereo: ...", "no finite points", ...)
   registration::PointCloud cloud;     ///< body frame; covariances when the sensor gives them
+  /// Stereo only: points between neighbouring pixels, for the DEM alone (stereo.fill_spacing_m).
+  registration::PointCloud fill;
   std::size_t input_points = 0;       ///< cloud: points read; stereo: pixels examined [count]
   std::size_t dropped_nonfinite = 0;  ///< non-finite points or covariances [count]
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)

@@ -150,7 +150,7 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
-  Fuse(source->cloud(), isolated.keep, r.step, &r);
+  Fuse(source->cloud(), isolated.keep, loaded.fill, r.step, &r);
 
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
@@ -376,7 +376,8 @@ Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
 }
 
 void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
-                  const ChainStep& step, FrameResult* result) {
+                  const registration::PointCloud& fill, const ChainStep& step,
+                  FrameResult* result) {
   const auto dem_start = Clock::now();
   const Eigen::Isometry3d& T = step.T_world_body;
   std::vector<Eigen::Vector3d> points_world;
@@ -393,8 +394,21 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
     if (has_cov) covariances.push_back(cloud.covariances[i]);
     if (has_normals) normals.push_back(cloud.normals[i]);
   }
+  // The DEM's fill points go with the frame's own (one FuseFrame: a cell's points of one frame
+  // weigh as one), not into the OctoMap, and only into cells that no measured point of this
+  // frame reached (FrameContext::fill_from): they close the gaps between the rows and leave
+  // measured cells to their measurements. They carry what the cloud carries, or are left out.
+  const std::size_t measured = points_world.size();
+  if ((fill.HasCovariances() || !has_cov) && (fill.HasNormals() || !has_normals)) {
+    for (std::size_t i = 0; i < fill.size(); ++i) {
+      points_world.push_back(T * fill.points[i]);
+      if (has_cov) covariances.push_back(fill.covariances[i]);
+      if (has_normals) normals.push_back(fill.normals[i]);
+    }
+  }
   dem::FrameContext ctx;
   ctx.frame = static_cast<std::uint32_t>(step.index);
+  ctx.fill_from = measured;
   ctx.R_world_cov = T.linear();  // the covariances are in the body frame
   ctx.sensor_origin_world = T * sensor_.T_body_sensor.translation();
   // The chain's covariance is a right perturbation of T_world_body; FuseFrame wants a left one
@@ -408,6 +422,7 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   result->time.fuse_dem_ms = MsSince(dem_start);
 
   const auto octomap_start = Clock::now();
+  points_world.resize(measured);
   octomap_.Insert(std::move(points_world), ctx.sensor_origin_world);
   result->time.fuse_octomap_ms = MsSince(octomap_start);
 }

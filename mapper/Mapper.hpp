@@ -190,7 +190,7 @@ class Mapper {
     return results_.empty() ? BiasEstimate{} : results_.back().odometry_bias;
   }
   void Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,
-            const ChainStep& step, FrameResult* result);
+            const registration::PointCloud& fill, const ChainStep& step, FrameResult* result);
   void KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud, const ChainStep& step,
                        double reference_distance_m);
 

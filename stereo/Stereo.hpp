@@ -44,6 +44,9 @@ struct StereoPointsResult {
   std::string message;
   /// Body-frame points with covariances [m²] (and normals when options.compute_normals).
   registration::PointCloud cloud;
+  /// Body-frame points between neighbouring pixels for the DEM (options.fill_spacing_m), with
+  /// covariances and (with normals) the nearer pixel's normal; not in `cloud`.
+  registration::PointCloud fill;
   cv::Mat disparity;       ///< the disparity used (CV_32F, NaN = invalid), when computed here
   std::size_t pixels = 0;  ///< pixels examined [count]
   std::size_t invalid_disparity = 0;  ///< no match, or non-positive d + offset [count]

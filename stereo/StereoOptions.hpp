@@ -60,6 +60,17 @@ struct StereoOptions {
   /// pixel of step) are across a depth edge and not used for the normal.
   double normal_max_depth_jump = 0.02;
 
+  /// DEM fill [m]: between two neighbouring pixels (4-neighbours) farther apart than this,
+  /// points every fill_spacing_m for the DEM only (StereoPointsResult::fill; registration and
+  /// the OctoMap do not see them). Far ground is sampled more coarsely than the DEM's cells
+  /// along the view, and pixel locking bunches the rows' depths, so without them one frame
+  /// covers the cells in stripes of constant range (README "Correlation stereo"). 0 = off;
+  /// keep it below dem.cell_size_m.
+  double fill_spacing_m = 0.025;
+  /// DEM fill: neighbours whose disparities differ by more than this [px] are across an edge
+  /// and not joined. At least a whole pixel, the step of a pixel-locked disparity.
+  double fill_max_step_px = 1.5;
+
   /// Voxel downsampling edge [m]; 0 = off. One fused point per occupied voxel.
   double voxel_size_m = 0.0;
 };

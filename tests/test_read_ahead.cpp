@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "config/Config.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReadAhead.hpp"
+#include "tests/support/PipelineDefaults.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
@@ -20,14 +20,11 @@ namespace {
 
 const fs::path kData = ROVERMAP_DATASETS_DIR;
 
-mapper::PipelineOptions Defaults() {
-  const config::Config c;
-  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
-}
+using rovermap::testing::PipelineDefaults;
 
 std::vector<mapper::FrameResult> OneByOne(const fs::path& sequence) {
   io::SequenceReader reader(sequence);
-  mapper::Mapper m(reader.info(), Defaults());
+  mapper::Mapper m(reader.info(), PipelineDefaults());
   io::Frame frame;
   while (reader.Next(&frame)) m.ProcessFrame(frame);
   return m.results();
@@ -35,7 +32,7 @@ std::vector<mapper::FrameResult> OneByOne(const fs::path& sequence) {
 
 std::vector<mapper::FrameResult> Ahead(const fs::path& sequence) {
   io::SequenceReader reader(sequence);
-  mapper::Mapper m(reader.info(), Defaults());
+  mapper::Mapper m(reader.info(), PipelineDefaults());
   mapper::ReadAhead ahead(&reader, &m);
   mapper::ReadAhead::Item item;
   std::size_t expected_index = 0;
@@ -85,7 +82,7 @@ TEST(ReadAhead, AnUnreadableFrameIsPassedOnWithItsErrorAndTheRestFollow) {
   std::ofstream(seq / "frames/000002.ply", std::ios::binary) << "ply\nformat ascii 1.0\n";
 
   io::SequenceReader reader(seq);
-  mapper::Mapper m(reader.info(), Defaults());
+  mapper::Mapper m(reader.info(), PipelineDefaults());
   mapper::ReadAhead ahead(&reader, &m);
   mapper::ReadAhead::Item item;
   std::vector<std::size_t> read, unreadable;
@@ -101,7 +98,7 @@ TEST(ReadAhead, AnUnreadableFrameIsPassedOnWithItsErrorAndTheRestFollow) {
 
 TEST(ReadAhead, StopsCleanlyWithAFrameInFlight) {
   io::SequenceReader reader(kData / "sim_tiny_stereo");
-  mapper::Mapper m(reader.info(), Defaults());
+  mapper::Mapper m(reader.info(), PipelineDefaults());
   {
     mapper::ReadAhead ahead(&reader, &m);
     mapper::ReadAhead::Item item;

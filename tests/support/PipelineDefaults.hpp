@@ -1,0 +1,14 @@
+#pragma once
+// The pipeline's options as `rovermap replay` gets them without a config file.
+
+#include "config/Config.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::testing {
+
+inline mapper::PipelineOptions PipelineDefaults() {
+  const config::Config c;
+  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+}
+
+}  // namespace rovermap::testing
