@@ -189,7 +189,8 @@ TEST(DemCoverage, KittiRoadHasNoBands) {
   const Replayed run = Replay(kData / "kitti_stereo51", Defaults(), 8);
   const Coverage road = Measure(run, {4.0, 2, 3.0});
   Print("kitti road", road, INFINITY);
-  // Measured: 0.980, emptiest stripe 0.065, against 0.960 and 0.176 without the fill.
+  // Measured: 0.980, emptiest stripe 0.065, against 0.960 and 0.176 without the fill; with the
+  // seed gate's trajectory (issue 31) 0.980 and 0.127 against 0.960 and 0.182.
   EXPECT_GE(road.Fraction(), 0.9);
-  EXPECT_LT(road.WorstBinHoles(kMinBinCells), 0.12);
+  EXPECT_LT(road.WorstBinHoles(kMinBinCells), 0.15);
 }
