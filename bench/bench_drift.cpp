@@ -59,12 +59,6 @@ struct Sequence {
   Poses odometry, truth;
 };
 
-Poses PosesOf(const std::vector<io::StampedPose>& stamped) {
-  Poses out;
-  for (const auto& p : stamped) out.push_back(p.T_world_body);
-  return out;
-}
-
 double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -74,7 +68,7 @@ Sequence Simulate(const std::string& name, const fs::path& dir, const sim::SimOp
   const io::SequenceReader reader(dir);
   std::vector<double> stamps;
   for (const auto& p : reader.odometry()) stamps.push_back(p.timestamp);
-  return {name, dir, stamps, PosesOf(reader.odometry()), PosesOf(reader.groundtruth())};
+  return {name, dir, stamps, io::PosesOf(reader.odometry()), io::PosesOf(reader.groundtruth())};
 }
 
 // --dump DIR: DIR/<sequence>/<method>.tum (and groundtruth.tum), for `rovermap eval`.

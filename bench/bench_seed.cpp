@@ -23,7 +23,6 @@
 #include "config/Config.hpp"
 #include "eval/HeadingError.hpp"
 #include "eval/TrajectoryMetrics.hpp"
-#include "mapper/Degeneracy.hpp"
 #include "mapper/SeedStudy.hpp"
 #include "sim/DeadReckoning.hpp"
 
@@ -37,12 +36,6 @@ struct Seed {
   std::string name;
   Poses odometry;
 };
-
-Poses PosesOf(const std::vector<io::StampedPose>& stamped) {
-  Poses out;
-  for (const auto& p : stamped) out.push_back(p.T_world_body);
-  return out;
-}
 
 void PrintRow(const std::string& name, const Poses& estimate, const Poses& truth,
               double reference_ate_m, const std::string& yaw_from_odometry = "") {
@@ -110,7 +103,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_seed: %s has no groundtruth.tum; skipped\n", dir.c_str());
       continue;
     }
-    const Poses truth = PosesOf(seq.truth);
+    const Poses truth = io::PosesOf(seq.truth);
     std::vector<Seed> seeds = {{"ground truth", truth}};
     Poses bundled;
     for (const io::Frame& f : seq.frames) bundled.push_back(f.T_world_body_odom);
@@ -118,7 +111,7 @@ int main(int argc, char** argv) {
     for (const Model& m : models) {
       const std::string name = m.name;
       if (quick && name != "0.4°/m, 3 %" && name != "0.8°/m, 3 %") continue;
-      seeds.push_back({m.name, PosesOf(sim::DeadReckoningFromTruth(seq.truth, m.model))});
+      seeds.push_back({m.name, io::PosesOf(sim::DeadReckoningFromTruth(seq.truth, m.model))});
     }
 
     std::printf("\n%s, %zu frames\n\n", dir.c_str(), seq.frames.size());
@@ -132,22 +125,19 @@ int main(int argc, char** argv) {
     for (const Seed& s : seeds) {
       const std::vector<mapper::FrameResult> results =
           mapper::RunWithOdometry(seq, s.odometry, options);
-      Poses estimate;
-      int yaw_from_odometry = 0;
-      for (const auto& r : results) {
-        estimate.push_back(r.step.T_world_body);
-        yaw_from_odometry += r.index > 0 && (r.odometry_directions & mapper::kYaw) != 0;
-      }
+      const mapper::ChainedRun run = mapper::Chained(results);
+      const Poses& estimate = run.poses;
       if (reference_ate == 0.0) {
         reference_ate =
             eval::EvaluateAssociated(estimate, truth, eval::EvalOptions()).ate_origin_m.rmse;
       }
       PrintRow("registered, seed " + s.name, estimate, truth, reference_ate,
-               std::to_string(yaw_from_odometry));
+               std::to_string(run.yaw_from_odometry));
       if (s.name != "ground truth") PrintRow("  the seed itself", s.odometry, truth, 0.0);
       std::fflush(stdout);
     }
-    if (vo) PrintRow("peer: stereo visual odometry (GFTT, KLT, PnP RANSAC)", *vo, truth, reference_ate);
+    if (vo)
+      PrintRow("peer: stereo visual odometry (GFTT, KLT, PnP RANSAC)", *vo, truth, reference_ate);
   }
   return 0;
 }

@@ -15,6 +15,14 @@ struct StampedPose {
   int line = 0;  ///< 1-based line in the file it was read from (0 if not read)
 };
 
+/// The poses of `stamped`, without their stamps.
+inline std::vector<Eigen::Isometry3d> PosesOf(const std::vector<StampedPose>& stamped) {
+  std::vector<Eigen::Isometry3d> out;
+  out.reserve(stamped.size());
+  for (const StampedPose& p : stamped) out.push_back(p.T_world_body);
+  return out;
+}
+
 /// Reads a TUM file: 8 space/tab separated numbers per line, `#` comments (whole line or
 /// trailing), blank lines ignored, LF or CRLF.
 /// @throw IoError "FILE:LINE: reason" if the file is missing or unreadable, a line does not have

@@ -88,4 +88,11 @@ Judgement JudgeCorrection(const Eigen::Isometry3d& T_predicted,
   return {true, FallbackReason::kNone, ""};
 }
 
+Matrix6d CovarianceOf(const OdometrySigma& sigma) {
+  Matrix6d cov = Matrix6d::Zero();
+  cov.diagonal() << Eigen::Vector3d::Constant(sigma.rotation_rad * sigma.rotation_rad),
+      Eigen::Vector3d::Constant(sigma.translation_m * sigma.translation_m);
+  return cov;
+}
+
 }  // namespace rovermap::mapper

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "mapper/MapperOptions.hpp"
+#include "mapper/PoseChain.hpp"  // Matrix6d
 #include "registration/Icp.hpp"
 
 namespace rovermap::mapper {
@@ -39,6 +40,8 @@ struct OdometrySigma {
   double rotation_rad = 0.0;
 };
 OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& options);
+/// The diagonal covariance [rx ry rz tx ty tz] (rad², m²) of those σ.
+Matrix6d CovarianceOf(const OdometrySigma& sigma);
 
 /// Status, inlier ratio and RMS of `result`. Never throws.
 Judgement JudgeRegistration(const registration::RegistrationResult& result,

@@ -28,9 +28,11 @@ io::Georeference MakeGeoreference(const io::SequenceInfo& sequence) {
   return io::Georeference(sequence.origin, io::ParseBody(sequence.body));
 }
 
+}  // namespace
+
 // The sensor as the pipeline uses it: stereo.num_disparities 0 resolved from the camera's
 // height and tilt above the ground.
-SensorSetup MakeSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options) {
+SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options) {
   SensorSetup sensor{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options};
   if (sequence.camera) {
     const io::CameraModel& c = *sequence.camera;
@@ -39,8 +41,6 @@ SensorSetup MakeSensor(const io::SequenceInfo& sequence, const stereo::StereoOpt
   }
   return sensor;
 }
-
-}  // namespace
 
 const char* ToString(FrameStatus status) {
   switch (status) {
@@ -74,7 +74,7 @@ struct Mapper::Registered {
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
     : sequence_(sequence),
       options_(options),
-      sensor_(MakeSensor(sequence, options.stereo)),
+      sensor_(ResolveSensor(sequence, options.stereo)),
       georef_(MakeGeoreference(sequence)),
       attitude_(options.mapper.odometry_attitude_sigma_deg,
                 options.mapper.registration_attitude_sigma_deg),
@@ -276,7 +276,9 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // reference frame (the last good frame; the same as the last frame unless it was bad).
   const Eigen::Isometry3d T_ref_predicted =
       T_world_ref.inverse() * last.T_world_body * chain_->PredictIncrement(T_world_body_odom);
-  const Matrix6d odometry_covariance = OdometryCovariance(T_ref_predicted);
+  const OdometrySigma odometry_sigma =
+      OdometryStepSigma(T_ref_predicted.translation().norm(), options_.mapper);
+  const Matrix6d odometry_covariance = CovarianceOf(odometry_sigma);
 
   // 3. Register onto the previous good frame (its tree and normals reused) or the local map.
   std::unique_ptr<registration::IndexedCloud> local;
@@ -292,13 +294,11 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
                                   target.cloud().HasCovariances();
   // The Mahalanobis gate opens by what dead reckoning may be wrong by over this step, unless
   // the configuration says how far the seed can be off.
-  const OdometrySigma seed =
-      OdometryStepSigma(T_ref_predicted.translation().norm(), options_.mapper);
   const double scale = options_.mapper.seed_gate_scale;
   if (registration.seed_rotation_sigma_deg <= 0.0)
-    registration.seed_rotation_sigma_deg = scale * seed.rotation_rad * 180.0 / M_PI;
+    registration.seed_rotation_sigma_deg = scale * odometry_sigma.rotation_rad * 180.0 / M_PI;
   if (registration.seed_translation_sigma_m <= 0.0)
-    registration.seed_translation_sigma_m = scale * seed.translation_m;
+    registration.seed_translation_sigma_m = scale * odometry_sigma.translation_m;
   out.matcher = registration::Register(source, target, T_ref_predicted, registration);
   const registration::RegistrationResult& m = *out.matcher;
   out.reference_distance_m = m.reference_distance_m;
@@ -368,11 +368,7 @@ ChainStep Mapper::Chain(const io::Frame& frame,
 }
 
 Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
-  const OdometrySigma sigma = OdometryStepSigma(increment.translation().norm(), options_.mapper);
-  Matrix6d cov = Matrix6d::Zero();
-  cov.diagonal() << Eigen::Vector3d::Constant(sigma.rotation_rad * sigma.rotation_rad),
-      Eigen::Vector3d::Constant(sigma.translation_m * sigma.translation_m);
-  return cov;
+  return CovarianceOf(OdometryStepSigma(increment.translation().norm(), options_.mapper));
 }
 
 void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,

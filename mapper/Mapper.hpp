@@ -113,6 +113,10 @@ class ReapplyError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The sensor as the pipeline uses it: sequence.yaml's, with stereo.num_disparities 0 resolved
+/// from the camera's height and tilt above the ground. Never throws.
+SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options);
+
 /// One sequence's pipeline. Holds the previous frame's indexed cloud (or the local map), the
 /// pose chain and the two maps; no frame's points are kept beyond the next frame (beyond K
 /// frames with the local map), so memory follows the mapped area, not the frame count.

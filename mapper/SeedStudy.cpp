@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "io/Sequence.hpp"
+#include "mapper/Degeneracy.hpp"
 
 namespace rovermap::mapper {
 
@@ -12,12 +13,11 @@ PreloadedSequence Preload(const std::filesystem::path& sequence_dir, const Pipel
   PreloadedSequence out;
   out.info = reader.info();
   out.truth = reader.groundtruth();
-  // The sensor as Mapper resolves it (stereo.num_disparities 0 from the camera's geometry).
-  const Mapper resolver(out.info, options);
+  const SensorSetup sensor = ResolveSensor(out.info, options.stereo);
   io::Frame frame;
   while ((max_frames == 0 || out.frames.size() < max_frames) && reader.Next(&frame)) {
     out.loaded.push_back(
-        LoadFrame(frame, resolver.sensor(), static_cast<std::size_t>(options.mapper.min_points)));
+        LoadFrame(frame, sensor, static_cast<std::size_t>(options.mapper.min_points)));
     frame.left.release();
     frame.right.release();
     frame.cloud = registration::PointCloud();
@@ -43,6 +43,15 @@ std::vector<FrameResult> RunWithOdometry(const PreloadedSequence& sequence,
     results.push_back(mapper.ProcessLoaded(frame, sequence.loaded[i]));
   }
   return results;
+}
+
+ChainedRun Chained(const std::vector<FrameResult>& results) {
+  ChainedRun out;
+  for (const FrameResult& r : results) {
+    out.poses.push_back(r.step.T_world_body);
+    out.yaw_from_odometry += r.index > 0 && (r.odometry_directions & kYaw) != 0;
+  }
+  return out;
 }
 
 }  // namespace rovermap::mapper

@@ -34,4 +34,12 @@ std::vector<FrameResult> RunWithOdometry(const PreloadedSequence& sequence,
                                          const std::vector<Eigen::Isometry3d>& odometry,
                                          const PipelineOptions& options);
 
+/// What a run chained: T_world_body per frame, and the increments whose yaw was kept from dead
+/// reckoning (there, the seed's heading error goes straight into the result).
+struct ChainedRun {
+  std::vector<Eigen::Isometry3d> poses;
+  int yaw_from_odometry = 0;
+};
+ChainedRun Chained(const std::vector<FrameResult>& results);
+
 }  // namespace rovermap::mapper

@@ -13,10 +13,10 @@
 #include "config/Config.hpp"
 #include "eval/HeadingError.hpp"
 #include "eval/TrajectoryMetrics.hpp"
-#include "mapper/Degeneracy.hpp"
 #include "mapper/SeedStudy.hpp"
 #include "sim/DeadReckoning.hpp"
 #include "sim/Simulator.hpp"
+#include "tests/support/PipelineDefaults.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 using namespace rovermap;
@@ -26,17 +26,12 @@ namespace {
 using Poses = std::vector<Eigen::Isometry3d>;
 
 mapper::PipelineOptions Defaults() {
-  const config::Config cfg;
-  mapper::PipelineOptions options{cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
+  mapper::PipelineOptions options = rovermap::testing::PipelineDefaults();
   options.octomap.enabled = false;  // not compared here
   return options;
 }
 
-Poses PosesOf(const std::vector<io::StampedPose>& stamped) {
-  Poses out;
-  for (const auto& p : stamped) out.push_back(p.T_world_body);
-  return out;
-}
+using io::PosesOf;
 
 struct Replayed {
   eval::HeadingErrors heading;
@@ -45,16 +40,12 @@ struct Replayed {
 };
 
 Replayed Replay(const mapper::PreloadedSequence& seq, const Poses& odometry) {
-  Poses estimate;
-  int yaw_from_odometry = 0;
-  for (const auto& r : mapper::RunWithOdometry(seq, odometry, Defaults())) {
-    estimate.push_back(r.step.T_world_body);
-    yaw_from_odometry += r.index > 0 && (r.odometry_directions & mapper::kYaw) != 0;
-  }
+  const mapper::ChainedRun run =
+      mapper::Chained(mapper::RunWithOdometry(seq, odometry, Defaults()));
   const Poses truth = PosesOf(seq.truth);
-  return {eval::CompareHeadings(estimate, truth),
-          eval::EvaluateAssociated(estimate, truth, eval::EvalOptions()).ate_origin_m.rmse,
-          yaw_from_odometry};
+  return {eval::CompareHeadings(run.poses, truth),
+          eval::EvaluateAssociated(run.poses, truth, eval::EvalOptions()).ate_origin_m.rmse,
+          run.yaw_from_odometry};
 }
 
 // Each seed model against the truth-seeded replay of the same frames.
