@@ -218,6 +218,13 @@ std::vector<KeyEntry> BuildRegistry() {
   sim.Double("pixel_sigma_px", &M::pixel_sigma_px, "px", AtLeast(0), "cloud mode: image noise");
   sim.Double("outlier_fraction", &M::outlier_fraction, "ratio", Bounds{0, false, 1, false},
              "cloud mode: points at a random depth");
+  sim.Double("disparity_locking", &M::disparity_locking, "ratio", Bounds{0, false, 1, false},
+             "cloud mode: sub-pixel disparity pulled toward whole pixels; 1 = whole pixels");
+  sim.Double("range_quantisation_m", &M::range_quantisation_m, "m", AtLeast(0),
+             "cloud mode: range rounded to bins of this size along the ray; 0 = off");
+  sim.Bool("cloud_normals", &M::cloud_normals,
+           "cloud mode: PLY frames carry the terrain's true normals; false: none, estimated as for "
+           "a real sensor");
   sim.Int("odometry_seed", &M::odometry_seed, "count", AnyValue(),
           "seeds the odometry errors alone; 0 = sim.seed");
   sim.Double("odom_scale_error", &M::odom_scale_error, "ratio", GreaterThan(-1),
@@ -314,6 +321,9 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "roll and pitch uncertainty a registered increment adds (floor)");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
+  map.Double("min_information_over_noise", &P::min_information_over_noise, "ratio", AtLeast(0),
+             "directions with less than this x what the normals' noise alone gives keep dead "
+             "reckoning; 0 = off");
   map.Double("odometry_bias_rate", &P::odometry_bias_rate, "1/frame", Bounds{0, false, 1, false},
              "evidence each frame forgets in dead reckoning's bias estimate; 0 = off");
   map.Double("odometry_bias_prior_ratio", &P::odometry_bias_prior_ratio, "ratio", GreaterThan(0),

@@ -53,13 +53,19 @@ struct BlendedIncrement {
 /// eigenvalues compare with the translations' in metres, as `conditioning` does. Directions
 /// whose eigenvalue is below `min_information` × the largest keep the prediction, moved by
 /// `odometry_bias` (dead reckoning's estimated error per increment, same parameterisation) in
-/// those directions; min_information <= 0 keeps the registration whole. A zero information
-/// keeps the prediction whole. Never throws.
+/// those directions; min_information <= 0 keeps the registration whole. An eigen-direction v
+/// must also hold `min_information_over_noise` × the information `noise_information` gives it
+/// (vᵀIv >= k·vᵀNv, N = RegistrationResult::noise_information: what the errors of the matched
+/// normals alone produce on featureless ground; 0 = no such test). The bias is informed by
+/// the directions passing both tests with bias_min_information. A zero information keeps the
+/// prediction whole. Never throws.
 BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 const Eigen::Isometry3d& T_registered, const Matrix6d& information,
                                 double extent_m, double min_information,
                                 const Matrix6d& odometry_covariance,
                                 const Vector6d& odometry_bias = Vector6d::Zero(),
-                                double bias_min_information = 1e-6);
+                                double bias_min_information = 1e-6,
+                                const Matrix6d& noise_information = Matrix6d::Zero(),
+                                double min_information_over_noise = 0.0);
 
 }  // namespace rovermap::mapper

@@ -315,10 +315,13 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   const BlendedIncrement blended =
       BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
                      options_.mapper.min_information, odometry_covariance, OdometryBias().bias,
-                     options_.mapper.bias_min_information);
+                     options_.mapper.bias_min_information, m.noise_information,
+                     options_.mapper.min_information_over_noise);
   if (blended.constrained == 0) {
     out.reason = FallbackReason::kRegistrationFailed;
-    out.detail = "no direction constrained (information ratio below mapper.min_information)";
+    out.detail =
+        "no direction constrained (information below mapper.min_information or "
+        "mapper.min_information_over_noise)";
     return out;
   }
   const Judgement plausible = JudgeCorrection(T_ref_predicted, blended.T, options_.mapper);

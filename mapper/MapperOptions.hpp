@@ -64,6 +64,12 @@ struct MapperOptions {
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
   /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.
   double min_information = 1e-4;
+  /// Degeneracy against the noise: a direction must also hold this many times the information
+  /// the errors of the matched normals alone would give it (RegistrationResult::
+  /// noise_information): on featureless ground with real noise, range bins or disparity pixel
+  /// locking, the in-plane directions get information from those errors and nothing else
+  /// [ratio]. 0 = off.
+  double min_information_over_noise = 6.0;
   /// Dead reckoning's bias: in the directions kept from dead reckoning, the prediction is moved
   /// by an estimate of its systematic error per frame (a heading-rate bias, a wheel-scale
   /// error): the mean of the registration's corrections in the directions they inform, each

@@ -357,8 +357,14 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
                         RegistrationResult* result) {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   Mat6 info = Mat6::Zero();
+  Mat6 floor = Mat6::Zero();  // what the normals' own errors would give (noise_information)
   const Eigen::Matrix3d rotation = T.linear();
   const bool plane = EffectiveResidual(options) == Residual::kPointToPlane;
+  // The floor needs normals fitted to the points by PCA at both ends (EstimatesOrientations):
+  // given normals are either exact (a simulator's) or, from a stereo image's neighbouring
+  // pixels, so noisy that textured ground's in-plane information is only 1.7-2.1x their floor
+  // (the simulated stereo traverse), where registration still beats dead reckoning 3x.
+  const bool floor_from_pairs = target.EstimatesOrientations() && source.EstimatesOrientations();
   double sum_sq = 0.0;
   std::size_t n = 0;
   for (const Match& m : matches) {
@@ -373,12 +379,36 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
       if (nrm.isZero()) continue;
       const Eigen::Matrix<double, 1, 6> jp = nrm.transpose() * j;
       const double e = nrm.dot(d);
+      // A normal tilted by δn (⊥ n) adds δnᵀj to the row: on featureless ground that is all
+      // the information the in-plane directions get. δn's covariance is taken from how far the
+      // pair's two normals disagree (half the outer product of their difference in the tangent
+      // plane): the ground's shape is common to both frames, their noise and sensor-fixed
+      // artefacts (range bins, pixel locking: they moved with the sensor) are not. Without a
+      // source normal, from the target's own expected error (spread²/2 per axis).
+      const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
+      Eigen::Matrix3d tilt = Eigen::Matrix3d::Zero();
+      const Eigen::Vector3d source_normal =
+          floor_from_pairs ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
+                           : Eigen::Vector3d::Zero();
+      if (!source_normal.isZero()) {
+        const Eigen::Vector3d diff =
+            tangent * (source_normal.dot(nrm) < 0.0 ? -source_normal : source_normal);
+        tilt = 0.5 * diff * diff.transpose();
+      } else if (target.EstimatesOrientations()) {
+        const double spread = target.orientation_spread(m.target_index);
+        tilt = 0.5 * spread * spread * tangent;
+      }
+      const Mat6 noise = j.transpose() * tilt * j;
       if (options.use_uncertainty) {
         const double var =
             nrm.dot(PairCovariance(source.cloud(), target.cloud(), m, rotation, 0.0) * nrm);
-        if (var > 0.0) info += jp.transpose() * jp / var;
+        if (var > 0.0) {
+          info += jp.transpose() * jp / var;
+          floor += noise / var;
+        }
       } else {
         info += jp.transpose() * jp;
+        floor += noise;
       }
       sum_sq += e * e;
     } else if (options.use_uncertainty) {
@@ -395,8 +425,12 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
   const double dof = plane ? static_cast<double>(n) - 6.0 : 3.0 * static_cast<double>(n) - 6.0;
   if (n < 3 || dof <= 0.0) return;
   // Without per-point covariances the residual variance is estimated from the fit.
-  if (!options.use_uncertainty) info /= std::max(sum_sq / dof, 1e-24);
+  if (!options.use_uncertainty) {
+    info /= std::max(sum_sq / dof, 1e-24);
+    floor /= std::max(sum_sq / dof, 1e-24);
+  }
   result->information = info;
+  result->noise_information = floor;
   const Eigen::FullPivLU<Mat6> lu(info);
   if (lu.isInvertible()) result->covariance = lu.inverse();
 

@@ -108,6 +108,11 @@ struct RegistrationResult {
   /// From the final pairs assuming independent residuals (optimistic for dense clouds).
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  /// The part of `information` the errors of the target's normals alone would give on
+  /// featureless ground (point-to-plane; same parameterisation): a direction whose information
+  /// is not well above it is constrained by noise and artefacts, not by the ground's shape.
+  /// Zero where the normals carry no expected error (given normals, point-to-point).
+  Eigen::Matrix<double, 6, 6> noise_information = Eigen::Matrix<double, 6, 6>::Zero();
   /// Smallest / largest eigenvalue of the information scaled to unit metres and radians:
   /// near 0 means a direction the data do not constrain (a plane, a corridor).
   double conditioning = 0.0;

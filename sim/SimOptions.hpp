@@ -61,6 +61,13 @@ struct SimOptions {
   double disparity_sigma_px = 0.2;
   double pixel_sigma_px = 0.3;
   double outlier_fraction = 0.01;  ///< points moved to a random depth on their ray
+  /// Sensor-fixed artefacts real sensors leave and smooth noise does not: sub-pixel disparity
+  /// pulled toward whole pixels (0 = none, 1 = whole-pixel disparities: a matcher's pixel
+  /// locking) and range rounded to bins of this size along the ray [m] (a lidar's range bins;
+  /// 0 = off). Both are fixed to the sensor, not to the ground.
+  double disparity_locking = 0.0;
+  double range_quantisation_m = 0.0;
+  bool cloud_normals = true;  ///< PLY frames carry the terrain's true normals (else none)
 
   // Dead reckoning.
   int odometry_seed = 0;                       ///< seeds the odometry errors alone; 0 = sim.seed's

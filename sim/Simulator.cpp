@@ -49,6 +49,8 @@ const SimOptions& Validated(const SimOptions& o) {
           "camera: baseline, focal > 0, image >= 16 px");
   Require(o.cloud_stride_px >= 1, "cloud_stride_px >= 1");
   Require(o.max_range_m > 0, "max_range_m > 0");
+  Require(o.disparity_locking >= 0 && o.disparity_locking <= 1, "disparity_locking in [0, 1]");
+  Require(o.range_quantisation_m >= 0, "range_quantisation_m >= 0");
   return o;
 }
 
@@ -243,16 +245,28 @@ SimCloud Simulator::RenderCloud(std::size_t index) const {
         d = fb / z;
         ++out.outliers;
       }
+      // Pixel locking: the sub-pixel part of the disparity shrunk toward the whole pixel.
+      if (o.disparity_locking > 0.0) {
+        const double whole = std::round(d);
+        d = whole + (1.0 - o.disparity_locking) * (d - whole);
+      }
       if (!(d > 0)) continue;
       const double z = fb / d;
-      const Eigen::Vector3d p((un - c.cx) * z / c.fx, (vn - c.cy) * z / c.fy, z);
+      Eigen::Vector3d p((un - c.cx) * z / c.fx, (vn - c.cy) * z / c.fy, z);
+      if (o.range_quantisation_m > 0.0) {  // range bins along the ray, fixed to the sensor
+        const double range = p.norm();
+        const double binned =
+            std::max(1.0, std::round(range / o.range_quantisation_m)) * o.range_quantisation_m;
+        p *= binned / range;
+      }
       // Covariance by the same first-order model as stereo::PointCovariance.
       const Eigen::Vector3d j_d = -p / d;
       Eigen::Matrix3d cov = o.disparity_sigma_px * o.disparity_sigma_px * j_d * j_d.transpose();
       cov(0, 0) += std::pow(o.pixel_sigma_px * z / c.fx, 2);
       cov(1, 1) += std::pow(o.pixel_sigma_px * z / c.fy, 2);
       out.cloud.points.push_back(p);
-      out.cloud.normals.push_back(R_camera_world * terrain_.Normal(hit.x(), hit.y()));
+      if (o.cloud_normals)
+        out.cloud.normals.push_back(R_camera_world * terrain_.Normal(hit.x(), hit.y()));
       out.cloud.covariances.push_back(cov);
     }
   }
