@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '3'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '4'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
@@ -122,6 +122,7 @@ void PutStep(Writer* w, const ChainStep& s) {
   w->Pose(s.cumulative_correction);
   w->Put<std::uint8_t>(s.fallback ? 1 : 0);
   w->Matrix(s.covariance);
+  w->Matrix(s.systematic_cross);
 }
 
 ChainStep GetStep(Reader* r) {
@@ -135,6 +136,7 @@ ChainStep GetStep(Reader* r) {
   s.cumulative_correction = r->Pose();
   s.fallback = r->Get<std::uint8_t>() != 0;
   r->Matrix(&s.covariance);
+  r->Matrix(&s.systematic_cross);
   return s;
 }
 

@@ -131,8 +131,9 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
 
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
   const Matrix6d unconstrained = s.asDiagonal() * left * s.cwiseInverse().asDiagonal();
-  out.covariance = s.asDiagonal() * constrained.covariance * s.asDiagonal() +
-                   unconstrained * odometry_covariance * unconstrained.transpose();
+  out.covariance_registered = s.asDiagonal() * constrained.covariance * s.asDiagonal();
+  out.covariance =
+      out.covariance_registered + unconstrained * odometry_covariance * unconstrained.transpose();
   return out;
 }
 

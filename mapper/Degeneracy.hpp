@@ -39,6 +39,8 @@ struct BlendedIncrement {
   /// Covariance of T for a left perturbation [rx ry rz tx ty tz] (rad, m), target frame: the
   /// registration's in the constrained directions, `odometry_covariance` in the others.
   Matrix6d covariance = Matrix6d::Zero();
+  /// The registration's part of `covariance` alone (its constrained directions).
+  Matrix6d covariance_registered = Matrix6d::Zero();
   /// What this frame tells of dead reckoning's bias (UpdateBias): the registration's
   /// correction of the prediction in the directions with at least `bias_min_information`, and
   /// the registration's information there (unscaled, [rad, m]); both zero elsewhere, and

@@ -343,7 +343,13 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   }
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
-  out.covariance_in_previous = A * blended.covariance * A.transpose();
+  // The stereo error model treats every pixel's error as its own; neighbouring pixels share
+  // theirs (the matcher's block, the sub-pixel window). Cloud frames keep their information as
+  // it is (the simulator's cloud traverse, independent noise per point: z ~ 1).
+  const double inflation =
+      sensor_.type == io::SensorType::kStereo ? options_.mapper.stereo_covariance_scale : 1.0;
+  const Matrix6d honest = blended.covariance + (inflation - 1.0) * blended.covariance_registered;
+  out.covariance_in_previous = A * honest * A.transpose();
   FloorAttitudeVariance(&out.covariance_in_previous,
                         options_.mapper.registration_attitude_sigma_deg);
   return out;
@@ -367,7 +373,16 @@ ChainStep Mapper::Chain(const io::Frame& frame,
   // Products of many small rotations drift off orthogonality (the matcher's iterates, the
   // chain); PoseChain takes only proper rotations, so project onto the nearest one.
   increment.linear() = Eigen::Quaterniond(increment.linear()).normalized().toRotationMatrix();
-  return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous);
+  // Part of the error repeats from step to step, in proportion to the step (SystematicError).
+  const MapperOptions& o = options_.mapper;
+  const double length = increment.translation().norm();
+  SystematicError systematic;
+  systematic.sigma << Eigen::Vector3d::Constant(o.registration_systematic_deg_per_m * M_PI / 180.0 *
+                                                length),
+      Eigen::Vector3d::Constant(o.registration_systematic_ratio * length);
+  systematic.persistence = std::exp(-1.0 / o.registration_systematic_frames);
+  const Matrix6d& covariance = covariance_in_previous;
+  return chain_->Add(frame.T_world_body_odom, increment, covariance, systematic);
 }
 
 Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {

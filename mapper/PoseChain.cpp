@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <stdexcept>
-#include <utility>
 #include <string>
+#include <utility>
 
 namespace rovermap::mapper {
 namespace {
@@ -87,7 +87,7 @@ Eigen::Isometry3d PoseChain::PredictIncrement(const Eigen::Isometry3d& T_world_b
 
 ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
                          const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
-                         const Matrix6d& increment_covariance) {
+                         const Matrix6d& increment_covariance, const SystematicError& systematic) {
   if (!IsFiniteRigid(T_world_body_odom)) {
     throw std::invalid_argument("PoseChain: frame " + std::to_string(size()) +
                                 " odometry pose is not a finite rigid transform");
@@ -110,7 +110,14 @@ ChainStep PoseChain::Add(const Eigen::Isometry3d& T_world_body_odom,
   step.cumulative_correction = T_world_body_odom.inverse() * step.T_world_body;
   // T̂(k−1)·Exp(ξ)·Exp(δ)·ΔT̂ ≈ T̂(k−1)·ΔT̂·Exp(Ad(ΔT̂⁻¹)(ξ + δ)) to first order.
   const Matrix6d A = Adjoint(step.used_increment.inverse());
-  step.covariance = A * (prev.covariance + increment_covariance) * A.transpose();
+  const Matrix6d L = systematic.sigma.asDiagonal();
+  const double phi = systematic.persistence;
+  const Matrix6d carried = phi * prev.systematic_cross;  // Cov(ξ_{k−1}, b_k)
+  step.covariance = A *
+                    (prev.covariance + increment_covariance + L * L.transpose() +
+                     carried * L.transpose() + L * carried.transpose()) *
+                    A.transpose();
+  step.systematic_cross = A * (carried + L);
 
   path_length_m_ += step.used_increment.translation().norm();
   if (step.fallback) ++fallbacks_;

@@ -72,6 +72,18 @@ struct ChainStep {
   /// (T = T̂ ∘ (Exp(ξr), ξt)), [rx ry rz tx ty tz] (rad, m): zero at frame 0, then
   /// Σ_k = A (Σ_{k−1} + Σ_increment) Aᵀ with A = Adjoint(used_increment⁻¹).
   Matrix6d covariance = Matrix6d::Zero();
+  /// Cross-covariance of that pose error with the registration's systematic error b (a unit
+  /// Gauss-Markov vector, Add's `systematic_sigma` scales it per step): what lets errors that
+  /// repeat from step to step add up linearly instead of as a random walk. Zero at frame 0.
+  Matrix6d systematic_cross = Matrix6d::Zero();
+};
+
+/// The part of an increment's error that repeats from one step to the next: σ per direction
+/// [rx ry rz (rad), tx ty tz (m)] in frame k−1 (as the covariance), and how much of it the
+/// next step keeps (b_k = persistence·b_{k−1} + √(1 − persistence²)·w, in [0, 1)).
+struct SystematicError {
+  Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Zero();
+  double persistence = 0.0;
 };
 
 /// Chains increments from the first dead-reckoning pose. The chain starts where dead
@@ -97,13 +109,16 @@ class PoseChain {
   /// used increment is `T_prev_curr_registered`, or the dead-reckoning increment (flagged
   /// `fallback`) when it is nullopt or not IsFiniteRigid. `increment_covariance` is the used
   /// increment's, for a left perturbation in the frame k−1 (RegistrationResult's convention);
-  /// it is propagated into the step's `covariance`.
+  /// it is propagated into the step's `covariance`, and so is `systematic`: with x = [ξ; b],
+  /// ξ_k = A(ξ_{k−1} + L b_k + n), L = diag(systematic.sigma), b of unit variance,
+  ///   Σ_k = A (Σ_{k−1} + Σ_increment + L Lᵀ + φ(C Lᵀ + L Cᵀ)) Aᵀ,  C_k = A (φ C_{k−1} + L).
   /// @return the new step (now back()).
   /// @throw std::invalid_argument if `T_world_body_odom` is not IsFiniteRigid; the chain is
   ///        then unchanged.
   ChainStep Add(const Eigen::Isometry3d& T_world_body_odom,
                 const std::optional<Eigen::Isometry3d>& T_prev_curr_registered,
-                const Matrix6d& increment_covariance = Matrix6d::Zero());
+                const Matrix6d& increment_covariance = Matrix6d::Zero(),
+                const SystematicError& systematic = {});
 
   /// The last step (frame 0's at first).
   const ChainStep& back() const { return last_; }

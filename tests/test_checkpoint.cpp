@@ -168,7 +168,8 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
     EXPECT_NE(std::string(e.what()).find("state.bin"), std::string::npos) << e.what();
   }
   // A snapshot of an earlier format (the frame results grew dead reckoning's bias, then the
-  // information it rests on) is named as such, not as damage.
+  // information it rests on, then the chain steps their systematic cross-covariance) is named as
+  // such, not as damage.
   f.open(snapshot, std::ios::in | std::ios::out | std::ios::binary);
   f.seekp(7);
   f.put('2');
@@ -177,7 +178,7 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
     cp.Restore(m.get(), [&](std::size_t k) { return Read(k); });
     FAIL() << "a snapshot of format 2 was accepted";
   } catch (const mapper::CheckpointError& e) {
-    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 2, this one reads 3)"),
+    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 2, this one reads 4)"),
               std::string::npos)
         << e.what();
   }
