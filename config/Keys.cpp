@@ -321,14 +321,12 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "roll and pitch uncertainty a registered increment adds (floor)");
   map.Double("stereo_covariance_scale", &P::stereo_covariance_scale, "ratio", AtLeast(1),
              "stereo frames' registration covariance x this (neighbouring pixels share errors)");
-  map.Double("registration_systematic_ratio", &P::registration_systematic_ratio, "ratio",
-             AtLeast(0),
-             "translation error per metre of a registered step that repeats (calibration)");
-  map.Double("registration_systematic_deg_per_m", &P::registration_systematic_deg_per_m, "deg/m",
-             AtLeast(0),
-             "rotation error per metre of a registered step that repeats (calibration)");
-  map.Double("registration_systematic_frames", &P::registration_systematic_frames, "frames",
-             GreaterThan(0), "steps over which the systematic part persists");
+  map.Double("stereo_systematic_ratio", &P::stereo_systematic_ratio, "ratio", AtLeast(0),
+             "stereo: translation error per metre of a registered step that repeats (calibration)");
+  map.Double("stereo_systematic_deg_per_m", &P::stereo_systematic_deg_per_m, "deg/m", AtLeast(0),
+             "stereo: rotation error per metre of a registered step that repeats (calibration)");
+  map.Double("stereo_systematic_frames", &P::stereo_systematic_frames, "frames", GreaterThan(0),
+             "stereo: steps over which the systematic part persists");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
   map.Double("min_information_over_noise", &P::min_information_over_noise, "ratio", AtLeast(0),

@@ -373,14 +373,16 @@ ChainStep Mapper::Chain(const io::Frame& frame,
   // Products of many small rotations drift off orthogonality (the matcher's iterates, the
   // chain); PoseChain takes only proper rotations, so project onto the nearest one.
   increment.linear() = Eigen::Quaterniond(increment.linear()).normalized().toRotationMatrix();
-  // Part of the error repeats from step to step, in proportion to the step (SystematicError).
+  // Part of a stereo step's error repeats from step to step, in proportion to the step
+  // (SystematicError): the rig's calibration. Measured on KITTI; cloud frames have none.
   const MapperOptions& o = options_.mapper;
-  const double length = increment.translation().norm();
+  const double length =
+      sensor_.type == io::SensorType::kStereo ? increment.translation().norm() : 0.0;
   SystematicError systematic;
-  systematic.sigma << Eigen::Vector3d::Constant(o.registration_systematic_deg_per_m * M_PI / 180.0 *
+  systematic.sigma << Eigen::Vector3d::Constant(o.stereo_systematic_deg_per_m * M_PI / 180.0 *
                                                 length),
-      Eigen::Vector3d::Constant(o.registration_systematic_ratio * length);
-  systematic.persistence = std::exp(-1.0 / o.registration_systematic_frames);
+      Eigen::Vector3d::Constant(o.stereo_systematic_ratio * length);
+  systematic.persistence = std::exp(-1.0 / o.stereo_systematic_frames);
   const Matrix6d& covariance = covariance_in_previous;
   return chain_->Add(frame.T_world_body_odom, increment, covariance, systematic);
 }

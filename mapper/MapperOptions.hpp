@@ -66,15 +66,15 @@ struct MapperOptions {
   /// against the ground truth is 5-10x the information's σ on KITTI and the simulator (README,
   /// "Honest uncertainty"). Cloud frames keep theirs.
   double stereo_covariance_scale = 50.0;
-  /// The part of a registered increment's error that repeats from step to step, per metre of
-  /// the step: a sensor's calibration (a stereo rig's baseline, focal length, rectification)
-  /// scales and turns every step alike [ratio of the step's length; deg per metre]. Chained as
+  /// The part of a registered stereo increment's error that repeats from step to step, per
+  /// metre of the step: a rig's calibration (baseline, focal length, rectification) scales and
+  /// turns every step alike [ratio of the step's length; deg per metre]. Cloud frames: none. Chained as
   /// a systematic error (PoseChain, SystematicError) that persists over about
-  /// `registration_systematic_frames` steps [frames], so it adds up linearly instead of as a
+  /// `stereo_systematic_frames` steps [frames], so it adds up linearly instead of as a
   /// random walk. On KITTI (1 m steps) these give a chained NEES of 7.4 (6 expected).
-  double registration_systematic_ratio = 0.007;
-  double registration_systematic_deg_per_m = 0.03;
-  double registration_systematic_frames = 100.0;
+  double stereo_systematic_ratio = 0.007;
+  double stereo_systematic_deg_per_m = 0.03;
+  double stereo_systematic_frames = 100.0;
 
   /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
