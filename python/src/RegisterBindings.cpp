@@ -104,6 +104,9 @@ void BindRegistration(py::module_& m) {
       .def_property_readonly(
           "information", [](const Registration& r) { return r.result.information; }, "6x6")
       .def_property_readonly(
+          "noise_information", [](const Registration& r) { return r.result.noise_information; },
+          "6x6: the part of `information` the matched normals' own errors give (PCA normals)")
+      .def_property_readonly(
           "trace", [](const Registration& r) { return TraceList(r.result.trace); },
           "one dict per iteration, the keys of the command's JSON trace")
       .def_property_readonly("message", [](const Registration& r) { return r.result.message; })

@@ -113,3 +113,21 @@ def test_curve_geometry_from_the_defaults():
     result = rovermap.register(curve @ T[:3, :3].T + T[:3, 3], curve, geometry="curve")
     assert result.usable
     np.testing.assert_allclose(result.T @ T, np.eye(4), atol=1e-3)
+
+
+def test_noise_floor_of_a_plane(tmp_path):
+    """A noisy plane without normals: x and y hold about their noise floor, z none of it; a
+    bumpy surface holds several times its floor."""
+    rng = np.random.default_rng(3)
+    g = np.arange(-4.0, 4.0, 0.05)
+    x, y = np.meshgrid(g, g)
+    def surface(bump):
+        z = bump * np.sin(2.0 * x) * np.cos(1.7 * y)
+        return np.column_stack([x.ravel(), y.ravel(), (z + rng.normal(0, 0.01, z.shape)).ravel()])
+    for bump, low, high in ((0.0, 0.0, 3.0), (0.2, 6.0, np.inf)):
+        result = rovermap.register(surface(bump), surface(bump))
+        assert result.usable
+        for axis in (3, 4):
+            ratio = result.information[axis, axis] / result.noise_information[axis, axis]
+            assert low < ratio < high, (bump, axis, ratio)
+        assert result.noise_information[5, 5] < 1e-3 * result.information[5, 5]
