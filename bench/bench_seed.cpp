@@ -105,9 +105,7 @@ int main(int argc, char** argv) {
     }
     const Poses truth = io::PosesOf(seq.truth);
     std::vector<Seed> seeds = {{"ground truth", truth}};
-    Poses bundled;
-    for (const io::Frame& f : seq.frames) bundled.push_back(f.T_world_body_odom);
-    seeds.push_back({"bundled odometry", bundled});
+    seeds.push_back({"bundled odometry", mapper::OdometryOf(seq)});
     for (const Model& m : models) {
       const std::string name = m.name;
       if (quick && name != "0.4°/m, 3 %" && name != "0.8°/m, 3 %") continue;

@@ -383,8 +383,7 @@ ChainStep Mapper::Chain(const io::Frame& frame,
                                                 length),
       Eigen::Vector3d::Constant(o.stereo_systematic_ratio * length);
   systematic.persistence = std::exp(-1.0 / o.stereo_systematic_frames);
-  const Matrix6d& covariance = covariance_in_previous;
-  return chain_->Add(frame.T_world_body_odom, increment, covariance, systematic);
+  return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous, systematic);
 }
 
 Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {

@@ -45,6 +45,13 @@ std::vector<FrameResult> RunWithOdometry(const PreloadedSequence& sequence,
   return results;
 }
 
+std::vector<Eigen::Isometry3d> OdometryOf(const PreloadedSequence& sequence) {
+  std::vector<Eigen::Isometry3d> out;
+  out.reserve(sequence.frames.size());
+  for (const io::Frame& f : sequence.frames) out.push_back(f.T_world_body_odom);
+  return out;
+}
+
 ChainedRun Chained(const std::vector<FrameResult>& results) {
   ChainedRun out;
   for (const FrameResult& r : results) {

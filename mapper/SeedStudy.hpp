@@ -34,6 +34,9 @@ std::vector<FrameResult> RunWithOdometry(const PreloadedSequence& sequence,
                                          const std::vector<Eigen::Isometry3d>& odometry,
                                          const PipelineOptions& options);
 
+/// The sequence's own dead reckoning (odometry.tum), one pose per frame.
+std::vector<Eigen::Isometry3d> OdometryOf(const PreloadedSequence& sequence);
+
 /// What a run chained: T_world_body per frame, and the increments whose yaw was kept from dead
 /// reckoning (there, the seed's heading error goes straight into the result).
 struct ChainedRun {

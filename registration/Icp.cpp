@@ -365,6 +365,7 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
   // pixels, so noisy that textured ground's in-plane information is only 1.7-2.1x their floor
   // (the simulated stereo traverse), where registration still beats dead reckoning 3x.
   const bool floor_from_pairs = target.EstimatesOrientations() && source.EstimatesOrientations();
+  const bool has_floor = target.EstimatesOrientations();
   double sum_sq = 0.0;
   std::size_t n = 0;
   for (const Match& m : matches) {
@@ -385,20 +386,23 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
       // plane): the ground's shape is common to both frames, their noise and sensor-fixed
       // artefacts (range bins, pixel locking: they moved with the sensor) are not. Without a
       // source normal, from the target's own expected error (spread²/2 per axis).
-      const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
-      Eigen::Matrix3d tilt = Eigen::Matrix3d::Zero();
-      const Eigen::Vector3d source_normal =
-          floor_from_pairs ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
-                           : Eigen::Vector3d::Zero();
-      if (!source_normal.isZero()) {
-        const Eigen::Vector3d diff =
-            tangent * (source_normal.dot(nrm) < 0.0 ? -source_normal : source_normal);
-        tilt = 0.5 * diff * diff.transpose();
-      } else if (target.EstimatesOrientations()) {
-        const double spread = target.orientation_spread(m.target_index);
-        tilt = 0.5 * spread * spread * tangent;
+      Mat6 noise = Mat6::Zero();
+      if (has_floor) {
+        const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
+        const Eigen::Vector3d source_normal =
+            floor_from_pairs ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
+                             : Eigen::Vector3d::Zero();
+        Eigen::Matrix3d tilt;
+        if (!source_normal.isZero()) {
+          const Eigen::Vector3d diff =
+              tangent * (source_normal.dot(nrm) < 0.0 ? -source_normal : source_normal);
+          tilt = 0.5 * diff * diff.transpose();
+        } else {
+          const double spread = target.orientation_spread(m.target_index);
+          tilt = 0.5 * spread * spread * tangent;
+        }
+        noise = j.transpose() * tilt * j;
       }
-      const Mat6 noise = j.transpose() * tilt * j;
       if (options.use_uncertainty) {
         const double var =
             nrm.dot(PairCovariance(source.cloud(), target.cloud(), m, rotation, 0.0) * nrm);

@@ -85,16 +85,11 @@ MonteCarlo SimulateChains(int steps, int runs, const Vector6d& white_sigma,
   return out;
 }
 
-mapper::PipelineOptions Defaults() {
-  mapper::PipelineOptions options = rovermap::testing::PipelineDefaults();
-  options.octomap.enabled = false;
-  return options;
-}
+using rovermap::testing::PipelineDefaultsWithoutOctoMap;
 
 mapper::CalibrationCheck Calibration(const mapper::PreloadedSequence& seq, const char* what) {
-  std::vector<Eigen::Isometry3d> odometry;
-  for (const io::Frame& f : seq.frames) odometry.push_back(f.T_world_body_odom);
-  const auto check = mapper::CheckCalibration(mapper::RunWithOdometry(seq, odometry, Defaults()));
+  const auto check = mapper::CheckCalibration(
+      mapper::RunWithOdometry(seq, mapper::OdometryOf(seq), PipelineDefaultsWithoutOctoMap()));
   EXPECT_TRUE(check.has_value());
   if (!check) return {};
   std::printf("%s: %zu frames, within 2 sigma %.3f, NEES mean %.2f, median %.2f\n", what,
@@ -143,8 +138,9 @@ TEST(SystematicError, NoneLeavesTheChainAsItWas) {
 // no systematic part): within 2σ 0.00, NEES mean 4487 over the 51 frames
 // (the stereo scale alone: 139).
 TEST(PoseCalibration, KittiStereo) {
-  const mapper::PreloadedSequence seq = mapper::Preload(
-      std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", Defaults(), 20);
+  const mapper::PreloadedSequence seq =
+      mapper::Preload(std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
+                      PipelineDefaultsWithoutOctoMap(), 20);
   const mapper::CalibrationCheck c = Calibration(seq, "kitti_stereo51, 20 frames");
   EXPECT_GE(c.within_2sigma, 0.85);
   EXPECT_LE(c.nees_mean, 12.0);
@@ -158,7 +154,8 @@ TEST(PoseCalibration, SimulatedStereo) {
   config::Config cfg;
   cfg.sim.frames = 12;
   sim::Simulator(cfg.sim).WriteSequence(dir, {});
-  const mapper::CalibrationCheck c = Calibration(mapper::Preload(dir, Defaults()), "sim stereo");
+  const mapper::CalibrationCheck c =
+      Calibration(mapper::Preload(dir, PipelineDefaultsWithoutOctoMap()), "sim stereo");
   EXPECT_GE(c.within_2sigma, 0.85);
   EXPECT_GE(c.nees_mean, 0.3);
 }

@@ -32,9 +32,8 @@ using namespace rovermap;
 namespace {
 
 mapper::PipelineOptions Defaults() {
-  mapper::PipelineOptions options = rovermap::testing::PipelineDefaults();
+  mapper::PipelineOptions options = rovermap::testing::PipelineDefaultsWithoutOctoMap();
   if (std::getenv("RM_NO_FLOOR")) options.mapper.min_information_over_noise = 0.0;
-  options.octomap.enabled = false;  // not compared here
   return options;
 }
 
@@ -65,8 +64,7 @@ Outcome ReplayOf(const sim::SimOptions& o, const std::string& name,
   const std::filesystem::path dir = rovermap::testing::ScratchDir() / name;
   sim::Simulator(o).WriteSequence(dir, {});
   const mapper::PreloadedSequence seq = mapper::Preload(dir, options);
-  std::vector<Eigen::Isometry3d> odometry;
-  for (const io::Frame& f : seq.frames) odometry.push_back(f.T_world_body_odom);
+  const std::vector<Eigen::Isometry3d> odometry = mapper::OdometryOf(seq);
   const std::vector<mapper::FrameResult> results = mapper::RunWithOdometry(seq, odometry, options);
   const mapper::ChainedRun run = mapper::Chained(results);
   const std::vector<Eigen::Isometry3d> truth = io::PosesOf(seq.truth);

@@ -25,11 +25,7 @@ namespace {
 
 using Poses = std::vector<Eigen::Isometry3d>;
 
-mapper::PipelineOptions Defaults() {
-  mapper::PipelineOptions options = rovermap::testing::PipelineDefaults();
-  options.octomap.enabled = false;  // not compared here
-  return options;
-}
+mapper::PipelineOptions Defaults() { return rovermap::testing::PipelineDefaultsWithoutOctoMap(); }
 
 using io::PosesOf;
 

@@ -11,4 +11,11 @@ inline mapper::PipelineOptions PipelineDefaults() {
   return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
 }
 
+/// The same without the OctoMap, for tests that compare trajectories or the DEM only.
+inline mapper::PipelineOptions PipelineDefaultsWithoutOctoMap() {
+  mapper::PipelineOptions options = PipelineDefaults();
+  options.octomap.enabled = false;
+  return options;
+}
+
 }  // namespace rovermap::testing
