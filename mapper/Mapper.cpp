@@ -32,13 +32,19 @@ io::Georeference MakeGeoreference(const io::SequenceInfo& sequence) {
 
 // The sensor as the pipeline uses it: stereo.num_disparities 0 resolved from the camera's
 // height and tilt above the ground.
-SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options) {
+SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options,
+                          const dem::ElevationMapOptions& dem) {
   SensorSetup sensor{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options};
   if (sequence.camera) {
     const io::CameraModel& c = *sequence.camera;
     sensor.stereo = stereo::ResolveDisparities(options, {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0},
                                                c.width, c.height, sequence.T_body_sensor);
   }
+  // The DEM tests the world frame's horizontal σ, this the body frame's: a margin for the tilt.
+  constexpr double kFillSigmaMargin = 1.25;
+  if (dem.max_horizontal_sigma_cells > 0.0)
+    sensor.stereo.fill_max_horizontal_sigma_m =
+        kFillSigmaMargin * dem.max_horizontal_sigma_cells * dem.cell_size_m;
   return sensor;
 }
 
@@ -74,7 +80,7 @@ struct Mapper::Registered {
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
     : sequence_(sequence),
       options_(options),
-      sensor_(ResolveSensor(sequence, options.stereo)),
+      sensor_(ResolveSensor(sequence, options.stereo, options.dem)),
       georef_(MakeGeoreference(sequence)),
       attitude_(options.mapper.odometry_attitude_sigma_deg,
                 options.mapper.registration_attitude_sigma_deg),
@@ -398,11 +404,13 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   std::vector<Eigen::Vector3d> points_world;
   std::vector<Eigen::Matrix3d> covariances;
   std::vector<Eigen::Vector3d> normals;  // body frame, as the covariances
-  points_world.reserve(cloud.size());
+  // Sized once for the measured points and the fill (growing them copied every covariance).
+  const std::size_t capacity = cloud.size() + fill.size();
+  points_world.reserve(capacity);
   const bool has_cov = cloud.HasCovariances();
   const bool has_normals = cloud.HasNormals();
-  if (has_cov) covariances.reserve(cloud.size());
-  if (has_normals) normals.reserve(cloud.size());
+  if (has_cov) covariances.reserve(capacity);
+  if (has_normals) normals.reserve(capacity);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!keep[i]) continue;
     points_world.push_back(T * cloud.points[i]);

@@ -114,8 +114,10 @@ class ReapplyError : public std::runtime_error {
 };
 
 /// The sensor as the pipeline uses it: sequence.yaml's, with stereo.num_disparities 0 resolved
-/// from the camera's height and tilt above the ground. Never throws.
-SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options);
+/// from the camera's height and tilt above the ground, and the stereo fill limited to the points
+/// the DEM would fuse (StereoOptions::fill_max_horizontal_sigma_m). Never throws.
+SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options,
+                          const dem::ElevationMapOptions& dem);
 
 /// One sequence's pipeline. Holds the previous frame's indexed cloud (or the local map), the
 /// pose chain and the two maps; no frame's points are kept beyond the next frame (beyond K

@@ -70,6 +70,12 @@ struct StereoOptions {
   /// DEM fill: neighbours whose disparities differ by more than this [px] are across an edge
   /// and not joined. At least a whole pixel, the step of a pixel-locked disparity.
   double fill_max_step_px = 1.5;
+  /// DEM fill: no fill point whose horizontal σ (the larger of the body-frame horizontal
+  /// block's) exceeds this [m]; 0 = no limit. Not a config key: the pipeline sets it from
+  /// the DEM (dem.max_horizontal_sigma_cells × dem.cell_size_m, with a margin), which would
+  /// drop such points anyway. Far rows are the farthest apart, so without it most of a KITTI
+  /// frame's 1.5 million fill points were made only to be dropped.
+  double fill_max_horizontal_sigma_m = 0.0;
 
   /// Voxel downsampling edge [m]; 0 = off. One fused point per occupied voxel.
   double voxel_size_m = 0.0;
