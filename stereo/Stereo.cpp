@@ -134,10 +134,16 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
         const double sigma_d = std::hypot(o.disparity_sigma_px, 0.5 * step);
         // The fill's nearer end is its most precise point: past the DEM's limit there, no
         // point of the segment would be fused.
-        if (max_h_sq > 0.0 &&
-            HorizontalVariance(R, PointCovariance(p.z() < q.z() ? p : q, camera, sigma_d,
-                                                  o.pixel_sigma_px)) > max_h_sq)
-          continue;
+        // Its farther end is its least precise: within the limit there, every point is.
+        bool check_each = false;
+        if (max_h_sq > 0.0) {
+          const bool p_nearer = p.z() < q.z();
+          if (HorizontalVariance(R, PointCovariance(p_nearer ? p : q, camera, sigma_d,
+                                                    o.pixel_sigma_px)) > max_h_sq)
+            continue;
+          check_each = HorizontalVariance(R, PointCovariance(p_nearer ? q : p, camera, sigma_d,
+                                                             o.pixel_sigma_px)) > max_h_sq;
+        }
         const double gap = (q - p).norm();
         const int n =
             std::min(kMaxFillPerPair, static_cast<int>(std::ceil(gap / o.fill_spacing_m)) - 1);
@@ -145,7 +151,7 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
           const double t = static_cast<double>(k) / (n + 1);
           const Eigen::Vector3d x = p + t * (q - p);
           const Eigen::Matrix3d cov = PointCovariance(x, camera, sigma_d, o.pixel_sigma_px);
-          if (max_h_sq > 0.0 && HorizontalVariance(R, cov) > max_h_sq) continue;
+          if (check_each && HorizontalVariance(R, cov) > max_h_sq) continue;
           fill->points.push_back(T_body_sensor * x);
           fill->covariances.push_back(R * cov * R.transpose());
           if (normals) {
