@@ -1,6 +1,5 @@
 // The `rovermap` command: parses the command line, runs one subcommand, and turns
 // typed errors into messages and exit statuses (DESIGN.md §5).
-#include <malloc.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -77,14 +76,6 @@ int main(int argc, char** argv) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
   }
-  // Every frame allocates and frees the same large buffers (a KITTI-size frame's 260 000 points,
-  // their covariances, the organised disparity image: 10-20 MB each). glibc returned them to
-  // the system after each frame and faulted them in again on the next: 20 % of a KITTI replay's
-  // CPU time went to page faults and munmap. Keep freed memory for reuse instead (mallopt(3):
-  // the largest threshold glibc accepts for mmap, 32 MiB; the heap is trimmed only past 1 GiB
-  // free). Peak memory is what the largest frame needs, as before.
-  mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
-  mallopt(M_TRIM_THRESHOLD, 1024 * 1024 * 1024);
   CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Help for every subcommand");
