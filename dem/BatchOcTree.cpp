@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
+#include <cmath>
 #include <utility>
 
 namespace rovermap::dem {
@@ -70,18 +72,73 @@ constexpr unsigned kRecentBits = 16;  // 64k entries, 512 kB: rays from one orig
 
 BatchOcTree::BatchOcTree(double resolution) : octomap::OcTree(resolution) {}
 
+// OcTreeBaseImpl::computeRayKeys (Amanatides & Woo's 3-D DDA), expression for expression so that
+// the same floats pick the same voxels, with each key's Morton code stepped along with it and
+// handed to the free set at once: no key ray stored and read back, no code spread from a key
+// per voxel (the two took 15 % of a KITTI replay's CPU time). The tests compare the tree with
+// OctoMap's insertPointCloud byte for byte.
 void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d& end) {
-  octomap::OcTreeKey end_key;
-  if (!coordToKeyChecked(end, end_key)) return;  // computeRayKeys would print and fail
-  if (!computeRayKeys(origin, end, ray_)) return;
-  for (const octomap::OcTreeKey& key : ray_) {
-    const std::uint64_t code = Morton(key);
+  octomap::OcTreeKey key_origin, key_end;
+  // computeRayKeys would print and fail on either.
+  if (!coordToKeyChecked(origin, key_origin) || !coordToKeyChecked(end, key_end)) return;
+  if (key_origin == key_end) return;  // the same voxel: no free space
+
+  const auto add = [this](std::uint64_t code) {
     // Most of a ray's voxels near the origin were just added by its neighbours: a lossy
     // filter drops those repeats before the sort, which removes the rest.
     const std::size_t slot = (code * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits);
-    if (recent_[slot] == code + 1) continue;
+    if (recent_[slot] == code + 1) return;
     recent_[slot] = code + 1;
     free_.push_back(code);
+  };
+  std::uint64_t code = Morton(key_origin);
+  const std::uint64_t code_end = Morton(key_end);
+  add(code);
+
+  octomap::point3d direction = (end - origin);
+  const float length = static_cast<float>(direction.norm());
+  direction /= length;
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  const octomap::OcTreeKey& current_key = key_origin;  // its coordinates live in `code` below
+  for (unsigned i = 0; i < 3; ++i) {
+    if (direction(i) > 0.0)
+      step[i] = 1;
+    else if (direction(i) < 0.0)
+      step[i] = -1;
+    else
+      step[i] = 0;
+    if (step[i] != 0) {
+      double voxel_border = this->keyToCoord(current_key[i]);
+      voxel_border += static_cast<float>(step[i] * this->resolution * 0.5);
+      t_max[i] = (voxel_border - origin(i)) / direction(i);
+      t_delta[i] = this->resolution / std::fabs(direction(i));
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = std::numeric_limits<double>::max();
+    }
+  }
+  // One key coordinate's bits in the code (every third bit from bit `dim`): adding or
+  // subtracting its unit there carries through that coordinate's bits alone.
+  constexpr std::uint64_t kMask = 0x249249249249ULL;
+  while (true) {
+    unsigned dim;
+    if (t_max[0] < t_max[1])
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    else
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    t_max[dim] += t_delta[dim];
+    const std::uint64_t mask = kMask << dim;
+    const std::uint64_t unit = std::uint64_t{1} << dim;
+    const std::uint64_t coordinate = code & mask;
+    const std::uint64_t stepped = step[dim] > 0 ? ((coordinate | ~mask) + unit) & mask
+                                                : (coordinate - unit) & mask;
+    code = (code & ~mask) | stepped;
+    if (code == code_end) return;
+    // Past the ray's length without meeting the end voxel (rounding): stop, as OctoMap does.
+    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return;
+    add(code);
   }
 }
 

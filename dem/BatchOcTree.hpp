@@ -49,7 +49,6 @@ class BatchOcTree : public octomap::OcTree {
   std::vector<std::uint64_t> updates_;  // code << 1 | occupied, ascending
   std::vector<std::uint64_t> scratch_;
   std::vector<std::uint64_t> recent_;  // direct-mapped filter of keys just added to free_
-  octomap::KeyRay ray_;
 };
 
 }  // namespace rovermap::dem
