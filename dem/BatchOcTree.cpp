@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace rovermap::dem {
@@ -132,8 +132,8 @@ void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d
     const std::uint64_t mask = kMask << dim;
     const std::uint64_t unit = std::uint64_t{1} << dim;
     const std::uint64_t coordinate = code & mask;
-    const std::uint64_t stepped = step[dim] > 0 ? ((coordinate | ~mask) + unit) & mask
-                                                : (coordinate - unit) & mask;
+    const std::uint64_t stepped =
+        step[dim] > 0 ? ((coordinate | ~mask) + unit) & mask : (coordinate - unit) & mask;
     code = (code & ~mask) | stepped;
     if (code == code_end) return;
     // Past the ray's length without meeting the end voxel (rounding): stop, as OctoMap does.
