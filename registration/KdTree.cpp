@@ -69,7 +69,8 @@ struct KdTree::Impl {
       if (hi[d] - lo[d] > hi[dim] - lo[dim]) dim = d;
     const std::size_t mid = Mid(begin, end);
     if (mid < end) {
-      std::nth_element(slots.begin() + static_cast<long>(begin), slots.begin() + static_cast<long>(mid),
+      std::nth_element(slots.begin() + static_cast<long>(begin),
+                       slots.begin() + static_cast<long>(mid),
                        slots.begin() + static_cast<long>(end),
                        [dim](const Slot& a, const Slot& b) { return a.x[dim] < b.x[dim]; });
       nodes[node] = Node{slots[mid].x[dim], dim};
@@ -163,8 +164,8 @@ Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance,
   return result;
 }
 
-std::size_t KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k,
-                                 std::size_t* indices, double* squared_distances) const {
+std::size_t KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k, std::size_t* indices,
+                                 double* squared_distances) const {
   k = std::min(k, size());
   if (k == 0) return 0;
   std::size_t count = 0;
@@ -185,6 +186,18 @@ std::size_t KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k,
   };
   impl_->Search(query, visit, worst);
   return count;
+}
+
+std::size_t KdTree::CountWithin(const Eigen::Vector3d& query, double radius,
+                                std::size_t at_most) const {
+  if (size() == 0 || at_most == 0 || !(radius >= 0.0)) return 0;
+  const double radius_sq = radius * radius;
+  std::size_t count = 0;
+  auto visit = [&](double d_sq, std::size_t) { count += d_sq <= radius_sq; };
+  // Cells farther than the radius are skipped; once enough are found, every cell is.
+  auto worst = [&] { return count >= at_most ? -1.0 : std::nextafter(radius_sq, INFINITY); };
+  impl_->Search(query, visit, worst);
+  return std::min(count, at_most);
 }
 
 std::vector<Neighbor> KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k) const {

@@ -9,8 +9,8 @@ namespace rovermap::registration {
 
 /// Result of a bounded closest-point query.
 struct Neighbor {
-  bool found = false;         ///< false: no point strictly within the bound ("no match")
-  std::size_t index = 0;      ///< index into the indexed points
+  bool found = false;             ///< false: no point strictly within the bound ("no match")
+  std::size_t index = 0;          ///< index into the indexed points
   double squared_distance = 0.0;  ///< [m^2]
 };
 
@@ -47,6 +47,11 @@ class KdTree {
   /// @return the number found (min(k, size())).
   std::size_t FindKNearest(const Eigen::Vector3d& query, std::size_t k, std::size_t* indices,
                            double* squared_distances) const;
+
+  /// How many points lie within `radius` [m] of `query` (squared distance <= radius²),
+  /// counting no further than `at_most`: the search stops once that many are found, so a
+  /// dense neighbourhood costs a leaf or two.
+  std::size_t CountWithin(const Eigen::Vector3d& query, double radius, std::size_t at_most) const;
 
   std::size_t size() const;
 

@@ -72,7 +72,8 @@ TEST(KdTree, LargeParallelBuiltTreeMatchesBruteForce) {
   std::uniform_real_distribution<double> u(-1.2, 1.2);
   for (int q = 0; q < 200; ++q) {
     const Eigen::Vector3d random(u(rng), u(rng), u(rng));
-    const Eigen::Vector3d query = q % 4 == 0 ? Eigen::Vector3d(0.3, -0.2, 0.0) + 0.002 * random : random;
+    const Eigen::Vector3d query =
+        q % 4 == 0 ? Eigen::Vector3d(0.3, -0.2, 0.0) + 0.002 * random : random;
     for (double bound : {0.01, 0.1, 10.0}) {
       const Neighbor expected = BruteClosest(pts, query, bound);
       const Neighbor got = tree.FindClosest(query, bound);
@@ -111,9 +112,10 @@ TEST(KdTree, ClusteredMatchesBruteForce) {
   std::mt19937 rng(4);
   std::normal_distribution<double> tight(0.0, 1e-4);
   Points pts;
-  for (const Eigen::Vector3d& c : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1),
-                                  Eigen::Vector3d(-1, 0.5, 0)})
-    for (int i = 0; i < 700; ++i) pts.push_back(c + Eigen::Vector3d(tight(rng), tight(rng), tight(rng)));
+  for (const Eigen::Vector3d& c :
+       {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(-1, 0.5, 0)})
+    for (int i = 0; i < 700; ++i)
+      pts.push_back(c + Eigen::Vector3d(tight(rng), tight(rng), tight(rng)));
   CheckAgainstBruteForce(pts, rng, 1.5);
 }
 
@@ -128,7 +130,8 @@ TEST(KdTree, BoundedSearchReturnsNoMatch) {
   // A point exactly at the bound is not "within" it.
   EXPECT_FALSE(tree.FindClosest(Eigen::Vector3d(0, 0, 2), 1.0).found);
   EXPECT_FALSE(tree.FindClosest(Eigen::Vector3d(0, 0, 0), 0.0).found);
-  EXPECT_TRUE(tree.FindClosest(Eigen::Vector3d(50, 0, 0), std::numeric_limits<double>::infinity()).found);
+  EXPECT_TRUE(
+      tree.FindClosest(Eigen::Vector3d(50, 0, 0), std::numeric_limits<double>::infinity()).found);
 }
 
 TEST(KdTree, EmptyTreeNeverMatches) {
@@ -166,8 +169,8 @@ TEST(KdTree, WarmStartedSearchGivesTheSameDistance) {
     for (double bound : {0.02, 0.2, 5.0}) {
       const Neighbor expected = BruteClosest(pts, query, bound);
       // Good hint (the answer), random hint (often outside the bound), invalid hint.
-      for (std::size_t hint : {expected.found ? expected.index : std::size_t{0}, any(rng),
-                               pts.size() + 7}) {
+      for (std::size_t hint :
+           {expected.found ? expected.index : std::size_t{0}, any(rng), pts.size() + 7}) {
         const Neighbor got = tree.FindClosest(query, bound, hint);
         ASSERT_EQ(got.found, expected.found);
         if (expected.found) {
@@ -176,4 +179,38 @@ TEST(KdTree, WarmStartedSearchGivesTheSameDistance) {
       }
     }
   }
+}
+
+// CountWithin against brute force: radii from empty to everything, the at_most cap, a point
+// exactly on the radius (counted), duplicates, and a large tree built in parallel.
+TEST(KdTree, CountWithinMatchesBruteForce) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> coordinate(-1.5, 1.5);
+  Points dense = RandomCloud(rng, 30000, 1.0);
+  const Points base = RandomCloud(rng, 40, 1.0);
+  Points duplicated;
+  for (int copy = 0; copy < 4; ++copy)
+    duplicated.insert(duplicated.end(), base.begin(), base.end());
+  for (const Points* pts : {&dense, &duplicated}) {
+    const KdTree tree(*pts);
+    for (int q = 0; q < 200; ++q) {
+      const Eigen::Vector3d query =
+          q % 2 == 0 ? (*pts)[static_cast<std::size_t>(q) % pts->size()]
+                     : Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+      for (const double radius : {0.0, 0.01, 0.05, 0.2, 5.0}) {
+        std::size_t expected = 0;
+        for (const auto& p : *pts) expected += (p - query).squaredNorm() <= radius * radius;
+        for (const std::size_t at_most : {std::size_t{1}, std::size_t{3}, pts->size()}) {
+          EXPECT_EQ(tree.CountWithin(query, radius, at_most), std::min(expected, at_most))
+              << "radius " << radius << ", at most " << at_most;
+        }
+      }
+    }
+  }
+  const Points pair = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  const KdTree tree(pair);
+  EXPECT_EQ(tree.CountWithin(Eigen::Vector3d(0, 0, 0), 1.0, 5), 2u);  // on the radius: counted
+  EXPECT_EQ(tree.CountWithin(Eigen::Vector3d(0, 0, 0), 0.999, 5), 1u);
+  EXPECT_EQ(tree.CountWithin(Eigen::Vector3d(0, 0, 0), -1.0, 5), 0u);
+  EXPECT_EQ(KdTree(Points()).CountWithin(Eigen::Vector3d::Zero(), 1.0, 5), 0u);
 }
