@@ -18,8 +18,8 @@ struct OutlierMask {
 };
 
 /// Radius outlier removal with a range-adaptive radius. A frame's points are spaced about
-/// range × a constant angle (the pixel pitch); that angle α is the median over the points of
-/// (nearest-neighbour distance / range). A point is isolated when fewer than `min_neighbors`
+/// range × a constant angle (the pixel pitch); that angle α is the median of (nearest-neighbour
+/// distance / range) over an even sample of at most 16 384 of the points. A point is isolated when fewer than `min_neighbors`
 /// other points lie within `radius_factor` · α · range of it. `tree` indexes `points`;
 /// `sensor_origin` is where the ranges are measured from. radius_factor <= 0 or min_neighbors
 /// <= 0 keeps everything. Never throws.
