@@ -101,7 +101,6 @@ void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d
   int step[3];
   double t_max[3];
   double t_delta[3];
-  const octomap::OcTreeKey& current_key = key_origin;  // its coordinates live in `code` below
   for (unsigned i = 0; i < 3; ++i) {
     if (direction(i) > 0.0)
       step[i] = 1;
@@ -110,7 +109,7 @@ void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d
     else
       step[i] = 0;
     if (step[i] != 0) {
-      double voxel_border = this->keyToCoord(current_key[i]);
+      double voxel_border = this->keyToCoord(key_origin[i]);
       voxel_border += static_cast<float>(step[i] * this->resolution * 0.5);
       t_max[i] = (voxel_border - origin(i)) / direction(i);
       t_delta[i] = this->resolution / std::fabs(direction(i));

@@ -334,11 +334,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       }
     }
     if (limit_h) {
-      // Largest eigenvalue of the 2×2 horizontal covariance.
-      const Eigen::Matrix2d h = horizontal * covariances[k] * horizontal.transpose();
-      const double mean = 0.5 * (h(0, 0) + h(1, 1));
-      const double half = 0.5 * (h(0, 0) - h(1, 1));
-      if (mean + std::sqrt(half * half + h(0, 1) * h(0, 1)) > max_h * max_h) {
+      if (LargestHorizontalVariance(horizontal, covariances[k]) > max_h * max_h) {
         ++stats.dropped_imprecise;
         continue;
       }

@@ -33,6 +33,7 @@
 // Non-finite points, variances or positions outside the grid are dropped and counted.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -96,16 +97,28 @@ struct ElevationMapOptions {
 /// @throw std::invalid_argument naming the field if a value is out of range.
 void Validate(const ElevationMapOptions& options);
 
+/// The largest eigenvalue of a point covariance's horizontal block, `horizontal` · cov ·
+/// `horizontal`ᵀ (the rows of the rotation to the frame whose x and y are horizontal) [m²]:
+/// what max_horizontal_sigma_cells is tested against. Also the stereo's DEM fill uses it, to
+/// make no point the DEM would drop.
+inline double LargestHorizontalVariance(const Eigen::Matrix<double, 2, 3>& horizontal,
+                                        const Eigen::Matrix3d& cov) {
+  const Eigen::Matrix2d h = horizontal * cov * horizontal.transpose();
+  const double mean = 0.5 * (h(0, 0) + h(1, 1));
+  const double half = 0.5 * (h(0, 0) - h(1, 1));
+  return mean + std::sqrt(half * half + h(0, 1) * h(0, 1));
+}
+
 /// One cell's published layers (the primary hypothesis). Empty cells have NaN elevation,
 /// variance, min and max and count 0.
 struct CellValue {
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
-  float elevation_m = kEmpty;    ///< fused height [m] (world z)
-  float variance_m2 = kEmpty;    ///< variance of elevation_m [m^2]
-  float min_m = kEmpty;          ///< lowest point taken into either hypothesis [m]
-  float max_m = kEmpty;          ///< highest such point [m]
-  std::uint32_t count = 0;       ///< points fused into the current estimate
-  std::uint32_t last_frame = 0;  ///< frame of the last update
+  float elevation_m = kEmpty;     ///< fused height [m] (world z)
+  float variance_m2 = kEmpty;     ///< variance of elevation_m [m^2]
+  float min_m = kEmpty;           ///< lowest point taken into either hypothesis [m]
+  float max_m = kEmpty;           ///< highest such point [m]
+  std::uint32_t count = 0;        ///< points fused into the current estimate
+  std::uint32_t last_frame = 0;   ///< frame of the last update
   std::uint32_t first_frame = 0;  ///< frame of the first point of the current estimate
   bool Empty() const { return count == 0; }
 };

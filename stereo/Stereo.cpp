@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "dem/ElevationMap.hpp"
 #include "registration/VoxelGrid.hpp"
 
 namespace rovermap::stereo {
@@ -89,15 +90,6 @@ void RefineSubpixel(const cv::Mat& left8, const cv::Mat& right8, int window, cv:
   }
 }
 
-// Largest eigenvalue of the body-frame horizontal (x, y) block of a sensor-frame covariance.
-double HorizontalVariance(const Eigen::Matrix3d& R_body_sensor, const Eigen::Matrix3d& cov) {
-  const Eigen::Matrix<double, 2, 3> horizontal = R_body_sensor.topRows<2>();
-  const Eigen::Matrix2d h = horizontal * cov * horizontal.transpose();
-  const double mean = 0.5 * (h(0, 0) + h(1, 1));
-  const double half = 0.5 * (h(0, 0) - h(1, 1));
-  return mean + std::sqrt(half * half + h(0, 1) * h(0, 1));
-}
-
 void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
                        const std::vector<int>& point_of, int cols,
                        const registration::PointCloud& cloud, const StereoCamera& camera,
@@ -114,6 +106,7 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
   const double fb = camera.fx * camera.baseline_m;
   const auto rows = static_cast<int>(organised.size() / static_cast<std::size_t>(cols));
   const double max_h_sq = o.fill_max_horizontal_sigma_m * o.fill_max_horizontal_sigma_m;
+  const Eigen::Matrix<double, 2, 3> horizontal = R.topRows<2>();  // body x, y of a sensor vector
   for (int v = 0; v < rows; ++v) {
     for (int u = 0; u < cols; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * cols + u;
@@ -138,11 +131,13 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
         bool check_each = false;
         if (max_h_sq > 0.0) {
           const bool p_nearer = p.z() < q.z();
-          if (HorizontalVariance(R, PointCovariance(p_nearer ? p : q, camera, sigma_d,
-                                                    o.pixel_sigma_px)) > max_h_sq)
+          if (dem::LargestHorizontalVariance(
+                  horizontal,
+                  PointCovariance(p_nearer ? p : q, camera, sigma_d, o.pixel_sigma_px)) > max_h_sq)
             continue;
-          check_each = HorizontalVariance(R, PointCovariance(p_nearer ? q : p, camera, sigma_d,
-                                                             o.pixel_sigma_px)) > max_h_sq;
+          check_each = dem::LargestHorizontalVariance(
+                           horizontal, PointCovariance(p_nearer ? q : p, camera, sigma_d,
+                                                       o.pixel_sigma_px)) > max_h_sq;
         }
         const double gap = (q - p).norm();
         const int n =
@@ -151,7 +146,7 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
           const double t = static_cast<double>(k) / (n + 1);
           const Eigen::Vector3d x = p + t * (q - p);
           const Eigen::Matrix3d cov = PointCovariance(x, camera, sigma_d, o.pixel_sigma_px);
-          if (check_each && HorizontalVariance(R, cov) > max_h_sq) continue;
+          if (check_each && dem::LargestHorizontalVariance(horizontal, cov) > max_h_sq) continue;
           fill->points.push_back(T_body_sensor * x);
           fill->covariances.push_back(R * cov * R.transpose());
           if (normals) {
