@@ -43,9 +43,11 @@ std::size_t DropNonFinite(registration::PointCloud* cloud) {
                         (!has_normals || cloud->normals[i].allFinite()) &&
                         (!has_cov || cloud->covariances[i].allFinite());
     if (!finite) continue;
-    cloud->points[kept] = cloud->points[i];
-    if (has_normals) cloud->normals[kept] = cloud->normals[i];
-    if (has_cov) cloud->covariances[kept] = cloud->covariances[i];
+    if (kept != i) {  // all finite (the usual case): nothing moves, nothing is written
+      cloud->points[kept] = cloud->points[i];
+      if (has_normals) cloud->normals[kept] = cloud->normals[i];
+      if (has_cov) cloud->covariances[kept] = cloud->covariances[i];
+    }
     ++kept;
   }
   const std::size_t dropped = cloud->size() - kept;
