@@ -9,6 +9,7 @@
 
 #include "config/Config.hpp"
 #include "io/FrameSource.hpp"
+#include "io/RegistrationPreview.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::apps {
@@ -36,8 +37,14 @@ struct RegisterArgs {
   std::string preview;  ///< PNG of the alignment before and after (optional)
 };
 CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args);
+/// Writes the --preview PNG (io::WriteRegistrationPreview in rovermap-full; the launcher, which
+/// loads no image codecs, hands --preview to rovermap-full and passes none).
+using PreviewWriter =
+    std::function<void(const std::filesystem::path& png, const registration::PointCloud& source,
+                       const registration::PointCloud& target, const Eigen::Isometry3d& T_init,
+                       const Eigen::Isometry3d& T_estimate, const io::PreviewOptions& options)>;
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
-int RunRegister(const RegisterArgs& args);
+int RunRegister(const RegisterArgs& args, const PreviewWriter& write_preview);
 
 struct EvalArgs {
   ConfigArgs config;

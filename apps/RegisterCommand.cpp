@@ -27,8 +27,8 @@ Eigen::Isometry3d ParseInit(const std::string& text) {
   double v[6];
   for (double& x : v)
     if (!(in >> x) || !std::isfinite(x))
-      throw UsageError("--init: expected 6 numbers \"rx ry rz tx ty tz\" (rad, m), got \"" +
-                       text + "\"");
+      throw UsageError("--init: expected 6 numbers \"rx ry rz tx ty tz\" (rad, m), got \"" + text +
+                       "\"");
   std::string extra;
   if (in >> extra) throw UsageError("--init: more than 6 values in \"" + text + "\"");
   const Eigen::Vector3d r(v[0], v[1], v[2]);
@@ -74,11 +74,12 @@ CLI::App* AddRegisterCommand(CLI::App* app, RegisterArgs* args) {
   return cmd;
 }
 
-int RunRegister(const RegisterArgs& args) {
-  const config::Config cfg = config::LoadConfig(
-      args.config.config_file.empty() ? std::nullopt
-                                      : std::optional<std::filesystem::path>(args.config.config_file),
-      args.config.overrides);
+int RunRegister(const RegisterArgs& args, const PreviewWriter& write_preview) {
+  const config::Config cfg =
+      config::LoadConfig(args.config.config_file.empty()
+                             ? std::nullopt
+                             : std::optional<std::filesystem::path>(args.config.config_file),
+                         args.config.overrides);
   const Eigen::Isometry3d T_init = ParseInit(args.init);
 
   const auto load_start = Clock::now();
@@ -109,36 +110,36 @@ int RunRegister(const RegisterArgs& args) {
                      {"accelerated", it.accelerated},
                      {"extrapolation_rejected", it.extrapolation_rejected}});
   }
-  nlohmann::json out = {
-      {"source", args.source},
-      {"target", args.target},
-      {"matrix", MatrixToJson(r.T_target_source.matrix())},
-      {"rotation_vector", ToJson(Eigen::Vector3d(aa.angle() * aa.axis()))},
-      {"translation", ToJson(Eigen::Vector3d(r.T_target_source.translation()))},
-      {"converged", r.converged},
-      {"status", registration::ToString(r.status)},
-      {"iterations", r.iterations},
-      {"sample_points", r.sample_points},
-      {"inliers", r.inliers},
-      {"inlier_ratio", r.inlier_ratio},
-      {"rms", r.rms_m},
-      {"final_dmax", r.dmax_m},
-      {"reference_distance", r.reference_distance_m},
-      {"conditioning", r.conditioning},
-      {"covariance", MatrixToJson(r.covariance)},
-      {"source_points", source_index.cloud().size()},
-      {"target_points", target_index.cloud().size()},
-      {"time_ms", time_ms},
-      {"load_ms", load_ms},
-      {"trace", trace}};
+  nlohmann::json out = {{"source", args.source},
+                        {"target", args.target},
+                        {"matrix", MatrixToJson(r.T_target_source.matrix())},
+                        {"rotation_vector", ToJson(Eigen::Vector3d(aa.angle() * aa.axis()))},
+                        {"translation", ToJson(Eigen::Vector3d(r.T_target_source.translation()))},
+                        {"converged", r.converged},
+                        {"status", registration::ToString(r.status)},
+                        {"iterations", r.iterations},
+                        {"sample_points", r.sample_points},
+                        {"inliers", r.inliers},
+                        {"inlier_ratio", r.inlier_ratio},
+                        {"rms", r.rms_m},
+                        {"final_dmax", r.dmax_m},
+                        {"reference_distance", r.reference_distance_m},
+                        {"conditioning", r.conditioning},
+                        {"covariance", MatrixToJson(r.covariance)},
+                        {"source_points", source_index.cloud().size()},
+                        {"target_points", target_index.cloud().size()},
+                        {"time_ms", time_ms},
+                        {"load_ms", load_ms},
+                        {"trace", trace}};
   if (!r.message.empty()) out["message"] = r.message;
   if (!args.preview.empty()) {
+    if (!write_preview) throw UsageError("--preview: this program writes no PNG");
     io::PreviewOptions preview;
     preview.title = std::filesystem::path(args.source).filename().string() + " -> " +
                     std::filesystem::path(args.target).filename().string() + ": " +
                     registration::ToString(r.status);
-    io::WriteRegistrationPreview(args.preview, source_index.cloud(), target_index.cloud(), T_init,
-                                 r.T_target_source, preview);
+    write_preview(args.preview, source_index.cloud(), target_index.cloud(), T_init,
+                  r.T_target_source, preview);
     out["preview"] = args.preview;
   }
   std::cout << out.dump(2) << "\n";

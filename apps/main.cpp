@@ -1,4 +1,5 @@
-// The `rovermap` command: parses the command line, runs one subcommand, and turns
+// rovermap-full, the program behind the `rovermap` command (apps/Launcher.cpp runs it for every
+// subcommand but a plain `register`): parses the command line, runs one subcommand, and turns
 // typed errors into messages and exit statuses (DESIGN.md §5).
 #include <unistd.h>
 
@@ -9,56 +10,13 @@
 #include <string>
 
 #include "apps/Commands.hpp"
+#include "apps/Startup.hpp"
 #include "config/ConfigError.hpp"
 #include "io/IoError.hpp"
-
-namespace {
+#include "io/RegistrationPreview.hpp"
 
 using namespace rovermap::apps;
-
-// The subcommands that keep OpenMP's threads busy frame after frame (see main).
-bool RunsManyFrames(int argc, char** argv) {
-  if (argc < 2) return false;
-  const std::string command = argv[1];
-  return command == "replay" || command == "serve" || command == "campaign" ||
-         command == "mosaic" || command == "simulate";
-}
-
-}  // namespace
-
-void rovermap::apps::AddConfigOptions(CLI::App* cmd, ConfigArgs* args) {
-  cmd->add_option("--config", args->config_file, "YAML config file (see config/default.yaml)");
-  cmd->add_option("--set", args->overrides, "Override one config key: --set key=value (repeatable)")
-      ->take_all();
-}
-
-rovermap::config::Config rovermap::apps::LoadConfigArgs(const ConfigArgs& args) {
-  if (args.config_file.empty()) return rovermap::config::LoadConfig(std::nullopt, args.overrides);
-  return rovermap::config::LoadConfig(std::filesystem::path(args.config_file), args.overrides);
-}
-
-int rovermap::apps::RunReportingErrors(const std::function<int()>& command, std::string* message) {
-  std::string text;
-  int status = kExitOk;
-  try {
-    return command();
-  } catch (const rovermap::config::ConfigError& e) {
-    text = std::string("config error: ") + e.what();
-    status = kExitUsage;
-  } catch (const UsageError& e) {
-    text = e.what();
-    status = kExitUsage;
-  } catch (const rovermap::io::IoError& e) {
-    text = e.what();
-    status = kExitFailure;
-  } catch (const std::exception& e) {
-    text = std::string("error: ") + e.what();
-    status = kExitFailure;
-  }
-  std::cerr << "rovermap: " << text << "\n";
-  if (message != nullptr) *message = text;
-  return status;
-}
+using namespace rovermap;
 
 int main(int argc, char** argv) {
   // Past a file-size limit (ulimit -f) write() fails with EFBIG, reported like a full disk,
@@ -107,7 +65,7 @@ int main(int argc, char** argv) {
   }
 
   return RunReportingErrors([&] {
-    if (register_cmd->parsed()) return RunRegister(register_args);
+    if (register_cmd->parsed()) return RunRegister(register_args, io::WriteRegistrationPreview);
     if (simulate_cmd->parsed()) return RunSimulate(simulate_args);
     if (eval_cmd->parsed()) return RunEval(eval_args);
     if (replay_cmd->parsed()) return RunReplay(replay_args);

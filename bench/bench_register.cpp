@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "bench/BenchUtil.hpp"
+#include "bench/GroundTruth.hpp"
 #include "config/Config.hpp"
 #include "io/PointCloudIo.hpp"
 #include "registration/Icp.hpp"
@@ -129,38 +130,6 @@ struct BenchPair {
   std::string perturbation;
 };
 
-// Closest rotation (Frobenius) to a nearly orthonormal matrix, det +1.
-Eigen::Matrix3d Orthonormalize(const Eigen::Matrix3d& m) {
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d u = svd.matrixU();
-  if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) *= -1.0;
-  return u * svd.matrixV().transpose();
-}
-
-// Row of gt_pairs.txt: "source target r11 r12 r13 tx r21 ... tz ...".
-Eigen::Isometry3d ReadGroundTruth(const std::string& path, const std::string& source,
-                                  const std::string& target) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    std::string s, t;
-    ss >> s >> t;
-    if (s != source || t != target) continue;
-    Eigen::Matrix<double, 3, 4> m;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c)
-        if (!(ss >> m(r, c))) throw std::runtime_error(path + ": bad row for " + s + " " + t);
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Orthonormalize(m.leftCols<3>());
-    T.translation() = m.col(3);
-    return T;
-  }
-  throw std::runtime_error(path + ": no row for " + source + " -> " + target);
-}
-
 BenchPair BunnyPair(const std::string& data_dir, const std::string& source,
                     const std::string& target) {
   const std::string dir = data_dir + "/stanford_bunny/";
@@ -168,7 +137,7 @@ BenchPair BunnyPair(const std::string& data_dir, const std::string& source,
   p.name = source.substr(0, source.find('.')) + "->" + target.substr(0, target.find('.'));
   p.source = rovermap::io::ReadPointCloud(dir + source);
   p.target = rovermap::io::ReadPointCloud(dir + target);
-  p.T_true = ReadGroundTruth(dir + "gt_pairs.txt", source, target);
+  p.T_true = rovermap::bench::ReadGroundTruth(dir + "gt_pairs.txt", source, target);
   p.T_init = rovermap::testing::Perturb(p.T_true, 10.0, 0.005);
   p.perturbation = "truth perturbed by 10 deg and 5 mm";
   return p;

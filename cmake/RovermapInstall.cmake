@@ -38,6 +38,8 @@ foreach(module IN LISTS ROVERMAP_LIBRARY_MODULES)
 endforeach()
 
 install(TARGETS rovermap RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The program behind every subcommand but a plain `register` (apps/Launcher.cpp finds it here).
+install(TARGETS rovermap_full RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/rovermap)
 install(TARGETS ${rovermap_library_targets} EXPORT rovermapTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(EXPORT rovermapTargets NAMESPACE rovermap:: DESTINATION ${rovermap_cmake_dir})

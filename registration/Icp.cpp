@@ -206,8 +206,8 @@ Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& targe
 // 1 / nᵀ(R Λx Rᵀ + Λy)n. Returns the weight (0 for a pair that carries nothing along its
 // normal), or a negative number when the pair fails the gate.
 double GateAndWeight(const IndexedCloud& source, const IndexedCloud& target, const Match& m,
-                     const Eigen::Isometry3d& T, double sampling_variance,
-                     const PoseSpread& spread, const RegistrationOptions& options) {
+                     const Eigen::Isometry3d& T, double sampling_variance, const PoseSpread& spread,
+                     const RegistrationOptions& options) {
   const Eigen::Vector3d p = T * source.cloud().points[m.source_index];
   const Eigen::Vector3d d = p - target.cloud().points[m.target_index];
   const Eigen::Matrix3d pair = PairCovariance(source.cloud(), target.cloud(), m, T.linear(), 0.0);
@@ -703,8 +703,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     dmax = update.dmax_m;
 
     // d. Discard pairs beyond Dmax, or outside the Mahalanobis gate (§4.4); weights.
-    KeepWithinGate(source, target, T, dmax, sampling_variance, spread, options, &matches,
-                   &weights);
+    KeepWithinGate(source, target, T, dmax, sampling_variance, spread, options, &matches, &weights);
     const std::size_t kept = matches.size();
     std::size_t forward = 0;
     for (const Match& m : matches) forward += !m.backward;

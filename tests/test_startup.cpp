@@ -1,7 +1,8 @@
-// How the `rovermap` command starts (apps/main.cpp): the commands that run many frames run
-// themselves again with OMP_WAIT_POLICY=PASSIVE (libgomp reads it only when it loads); the
-// one-shot ones do not, since loading the program's libraries twice cost a `register` of the
-// bunny pair 172 against 102 ms (README, "Threads").
+// How the `rovermap` command starts (apps/Launcher.cpp, apps/main.cpp): a plain `register` runs
+// in the launcher, which loads neither GDAL nor OpenCV's image codecs (65 of a one-shot
+// register's 99 ms); everything else runs in rovermap-full, which the launcher becomes. The
+// commands that run many frames get OMP_WAIT_POLICY=PASSIVE (libgomp reads it only when it
+// loads); the one-shot ones do not (README, "Threads").
 //
 // What the process runs with is read from /proc/PID/environ while it waits, blocked, to open its
 // configuration file (--config, read before anything else): a FIFO, which it cannot open before
@@ -34,6 +35,8 @@ namespace {
 struct Started {
   bool blocked_on_input = false;  ///< the process opened the FIFO
   std::string environment;        ///< its /proc/PID/environ then, NUL-separated
+  std::string program;            ///< the file name of the program it runs (/proc/PID/exe)
+  std::string maps;               ///< its /proc/PID/maps: the shared libraries it loaded
 };
 
 // Starts `rovermap ARGS` without OMP_WAIT_POLICY in its environment, waits until it opens
@@ -65,6 +68,10 @@ Started StartBlockedOn(const fs::path& fifo, const std::vector<std::string>& arg
     out.blocked_on_input = true;
     std::ifstream environ("/proc/" + std::to_string(pid) + "/environ", std::ios::binary);
     out.environment.assign(std::istreambuf_iterator<char>(environ), {});
+    std::error_code error;
+    out.program = fs::read_symlink("/proc/" + std::to_string(pid) + "/exe", error).filename();
+    std::ifstream maps("/proc/" + std::to_string(pid) + "/maps");
+    out.maps.assign(std::istreambuf_iterator<char>(maps), {});
     ::close(writer);  // the reader sees an empty input and fails on it
   } else {
     ::kill(pid, SIGKILL);
@@ -89,6 +96,21 @@ TEST(Startup, OneShotRegisterRunsOnce) {
                             (dir / "target.ply").string(), "--config", fifo.string()});
   ASSERT_TRUE(started.blocked_on_input);
   EXPECT_FALSE(HasPassiveWaitPolicy(started.environment));
+  EXPECT_EQ(started.program, "rovermap");
+  EXPECT_EQ(started.maps.find("libgdal"), std::string::npos);
+  EXPECT_EQ(started.maps.find("libopencv_imgcodecs"), std::string::npos);
+}
+
+TEST(Startup, RegisterWithAPreviewRunsInTheFullProgram) {
+  const fs::path dir = rovermap::testing::ScratchDir();
+  const fs::path fifo = dir / "config.yaml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Started started = StartBlockedOn(
+      fifo, {"register", (dir / "source.ply").string(), (dir / "target.ply").string(), "--preview",
+             (dir / "preview.png").string(), "--config", fifo.string()});
+  ASSERT_TRUE(started.blocked_on_input);
+  EXPECT_EQ(started.program, "rovermap-full");
+  EXPECT_FALSE(HasPassiveWaitPolicy(started.environment));
 }
 
 TEST(Startup, ReplayRunsAgainWithPassiveOpenMp) {
@@ -99,4 +121,5 @@ TEST(Startup, ReplayRunsAgainWithPassiveOpenMp) {
       fifo, {"replay", dir.string(), "--out", (dir / "out").string(), "--config", fifo.string()});
   ASSERT_TRUE(started.blocked_on_input);
   EXPECT_TRUE(HasPassiveWaitPolicy(started.environment));
+  EXPECT_EQ(started.program, "rovermap-full");
 }

@@ -35,14 +35,18 @@ for m in "${modules[@]}"; do
   [[ -f $prefix/lib/librovermap_$m.a ]] || fail "no lib/librovermap_$m.a"
   compgen -G "$prefix/include/rovermap/$m/*.hpp" >/dev/null || fail "no include/rovermap/$m/*.hpp"
 done
-for f in bin/rovermap include/rovermap/registration/Icp.hpp lib/pkgconfig/rovermap.pc \
+for f in bin/rovermap libexec/rovermap/rovermap-full include/rovermap/registration/Icp.hpp lib/pkgconfig/rovermap.pc \
   lib/cmake/rovermap/rovermapConfig.cmake lib/cmake/rovermap/rovermapConfigVersion.cmake \
   lib/cmake/rovermap/rovermapTargets.cmake share/rovermap/default.yaml \
   share/rovermap/presets/fast.yaml; do
   [[ -e $prefix/$f ]] || fail "no $f"
 done
 [[ ! -e $prefix/include/rovermap/io/detail ]] || fail "io/detail (private) was installed"
+# --help runs in rovermap-full (found in libexec/), a plain register in the launcher itself.
 "$prefix/bin/rovermap" --help >/dev/null || fail "the installed rovermap --help"
+bunny=$(cd "$here/../../datasets/stanford_bunny" && pwd)
+"$prefix/bin/rovermap" register "$bunny/bun045.ply" "$bunny/bun000.ply" >/dev/null ||
+  fail "the installed rovermap register"
 
 # The export must name neither the build-only warnings target nor the source or build tree.
 source_dir=$(cd "$here/../.." && pwd)

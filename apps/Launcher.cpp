@@ -1,0 +1,59 @@
+// The `rovermap` command. A one-shot `register` runs here, in a program that loads 8 shared
+// libraries (3 ms); every other command line runs in rovermap-full, which loads GDAL and OpenCV's
+// image codecs, about 160 libraries and 65 ms before its first line of work, and which this
+// process becomes (execv: the same process, its arguments and exit status unchanged).
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include "apps/Commands.hpp"
+#include "apps/Startup.hpp"
+
+namespace fs = std::filesystem;
+using namespace rovermap::apps;
+
+namespace {
+
+// rovermap-full beside this program (the build tree), else in ../libexec/rovermap/ (installed).
+fs::path FullProgram() {
+  std::error_code error;
+  const fs::path self = fs::read_symlink("/proc/self/exe", error);
+  const fs::path dir = error ? fs::path(".") : self.parent_path();
+  const fs::path beside = dir / "rovermap-full";
+  if (fs::exists(beside, error)) return beside;
+  return dir.parent_path() / "libexec" / "rovermap" / "rovermap-full";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::signal(SIGXFSZ, SIG_IGN);  // as rovermap-full (see main.cpp)
+  if (RunsInLauncher(argc, argv)) {
+    CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
+    app.require_subcommand(1);
+    app.set_help_all_flag("--help-all", "Help for every subcommand");  // its messages name it
+    RegisterArgs args;
+    AddRegisterCommand(&app, &args);
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+      const int code = app.exit(e);
+      return code == 0 ? kExitOk : kExitUsage;
+    }
+    return RunReportingErrors([&] { return RunRegister(args, PreviewWriter()); });
+  }
+  // Set here, so that rovermap-full need not run itself again for it (see main.cpp).
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr && RunsManyFrames(argc, argv))
+    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  const fs::path full = FullProgram();
+  ::execv(full.c_str(), argv);
+  std::cerr << "rovermap: cannot run " << full.string() << ": " << std::strerror(errno) << "\n";
+  return kExitFailure;
+}
