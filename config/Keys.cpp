@@ -349,7 +349,7 @@ std::vector<KeyEntry> BuildRegistry() {
   serve.Int("max_gap_frames", &V::max_gap_frames, "frames", AtLeast(1),
             "a ready frame further than this beyond the next expected is rejected");
   serve.Int("publish_every", &V::publish_every, "frames", AtLeast(1),
-            "publish the outputs after this many frames (and on exit)");
+            "publish the outputs after this many frames (and when idle, and on exit)");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),
             "snapshot the state after this many frames (each is journalled)");
   serve.Double("checkpoint_share", &V::checkpoint_share, "fraction", Bounds{0, false, 1, false},

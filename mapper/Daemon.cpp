@@ -137,7 +137,9 @@ void Daemon::Run(const std::atomic<int>& stop) {
     }
     publisher_.Poll();  // a publication that failed stops the daemon (Run's @throw)
     if (Step(files)) continue;
-    // Idle (the queue ran dry or waits on a gap): whoever monitors sees the latest.
+    // Idle (the queue ran dry or waits on a gap): whoever monitors sees the latest, the maps
+    // included: the frames since the last publication need not wait for publish_every more.
+    if (since_publish_ > 0) Publish();
     if (status_stale_) WriteStatus("running", waiting_);
     double wait_s = watcher.watching() ? std::min(o.poll_interval_s, 0.2) : o.poll_interval_s;
     if (gap_since_) {

@@ -135,6 +135,29 @@ TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
   EXPECT_EQ(CountLines(Slurp(dir_ / "log"), "serve: frame "), 5);
 }
 
+// When the queue runs dry the daemon publishes what it has: the last frames' maps do not wait
+// for serve.publish_every more frames (here 100) or for the daemon to stop.
+TEST_F(Serve, AnIdleDaemonPublishesItsLastFrames) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox");
+  const fs::path out = dir_ / "out";
+  const pid_t pid = Start(inbox, out, "log", {"--set", "serve.publish_every=100"});
+  const nlohmann::json status = WaitForNext(out, 5);
+  ASSERT_FALSE(status.is_null()) << Slurp(dir_ / "log");
+  nlohmann::json summary;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (fs::exists(out / "summary.json")) {
+      summary = nlohmann::json::parse(Slurp(out / "summary.json"));
+      if (summary["frames"] == 5) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(summary["frames"], 5) << Slurp(dir_ / "log");
+  EXPECT_TRUE(fs::exists(out / "dem.tif"));
+  EXPECT_EQ(nlohmann::json::parse(Slurp(out / "status.json"))["state"], "running");
+  Stop(pid);
+}
+
 // status.json with frames queued: at most every serve.status_interval_s (here never), yet
 // current as soon as the queue runs dry. Its writes are counted with inotify, as temporaries
 // created in OUT (each has its own name: identical events would be merged).
