@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "bench/BenchUtil.hpp"
-#include "bench/GroundTruth.hpp"
+#include "tests/support/StanfordPairs.hpp"
 #include "tests/support/SyntheticScenes.hpp"
 
 #ifndef ROVERMAP_DATASETS_DIR
@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
     for (const char* source_name : {"bun045", "bun315"}) {
       const std::string dir = args.data_dir + "/stanford_bunny/";
       const std::string source = dir + source_name + ".ply", target = dir + "bun000.ply";
-      const Eigen::Isometry3d T_true = rovermap::bench::ReadGroundTruth(
+      const Eigen::Isometry3d T_true = rovermap::testing::ReadGroundTruth(
           dir + "gt_pairs.txt", std::string(source_name) + ".ply", "bun000.ply");
       const Eigen::Isometry3d T_init = rovermap::testing::Perturb(T_true, 10.0, 0.005);
       const std::vector<std::string> rovermap_cmd = {args.rovermap, "register", source,

@@ -29,11 +29,11 @@
 #include <vector>
 
 #include "bench/BenchUtil.hpp"
-#include "bench/GroundTruth.hpp"
 #include "config/Config.hpp"
 #include "io/PointCloudIo.hpp"
 #include "registration/Icp.hpp"
 #include "registration/Options.hpp"
+#include "tests/support/StanfordPairs.hpp"
 #include "tests/support/SyntheticScenes.hpp"
 
 #ifdef ROVERMAP_BENCH_PEERS
@@ -137,7 +137,7 @@ BenchPair BunnyPair(const std::string& data_dir, const std::string& source,
   p.name = source.substr(0, source.find('.')) + "->" + target.substr(0, target.find('.'));
   p.source = rovermap::io::ReadPointCloud(dir + source);
   p.target = rovermap::io::ReadPointCloud(dir + target);
-  p.T_true = rovermap::bench::ReadGroundTruth(dir + "gt_pairs.txt", source, target);
+  p.T_true = rovermap::testing::ReadGroundTruth(dir + "gt_pairs.txt", source, target);
   p.T_init = rovermap::testing::Perturb(p.T_true, 10.0, 0.005);
   p.perturbation = "truth perturbed by 10 deg and 5 mm";
   return p;

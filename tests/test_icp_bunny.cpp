@@ -15,6 +15,7 @@
 #include "config/Config.hpp"
 #include "io/PointCloudIo.hpp"
 #include "registration/Icp.hpp"
+#include "tests/support/StanfordPairs.hpp"
 #include "tests/support/SyntheticScenes.hpp"
 
 using namespace rovermap::registration;
@@ -27,26 +28,7 @@ const std::string kDir = std::string(ROVERMAP_DATASETS_DIR) + "/stanford_bunny/"
 
 // T_target_source of a pair from gt_pairs.txt, rotation re-orthonormalised (9 digits).
 Eigen::Isometry3d GroundTruth(const std::string& source, const std::string& target) {
-  std::ifstream in(kDir + "gt_pairs.txt");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream row(line);
-    std::string s, t;
-    row >> s >> t;
-    if (s != source || t != target) continue;
-    Eigen::Matrix<double, 3, 4> m;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) row >> m(r, c);
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.leftCols<3>(),
-                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = svd.matrixU() * svd.matrixV().transpose();
-    T.translation() = m.col(3);
-    return T;
-  }
-  ADD_FAILURE() << "pair " << source << " -> " << target << " not in gt_pairs.txt";
-  return Eigen::Isometry3d::Identity();
+  return rovermap::testing::ReadGroundTruth(kDir + "gt_pairs.txt", source, target);
 }
 
 class Bunny : public ::testing::Test {

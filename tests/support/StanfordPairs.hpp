@@ -1,6 +1,6 @@
 #pragma once
 // The Stanford bunny pairs' ground truth (datasets/stanford_bunny/gt_pairs.txt), shared by the
-// registration benchmarks.
+// bunny tests and the registration benchmarks.
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace rovermap::bench {
+namespace rovermap::testing {
 
 // Closest rotation (Frobenius) to a nearly orthonormal matrix, det +1.
 inline Eigen::Matrix3d Orthonormalize(const Eigen::Matrix3d& m) {
@@ -43,4 +43,4 @@ inline Eigen::Isometry3d ReadGroundTruth(const std::string& path, const std::str
   throw std::runtime_error(path + ": no row for " + source + " -> " + target);
 }
 
-}  // namespace rovermap::bench
+}  // namespace rovermap::testing
