@@ -112,18 +112,61 @@ struct PoseSpread {
   }
 };
 
+// What the last search of one query point found: where the point was, its closest point
+// (the next search's warm start) and a lower bound on every other point's distance. Late
+// iterations move the points by far less than the gap between their closest and second
+// closest points, and then the closest point cannot have changed (Lookup): most of a
+// frame's searches are skipped with the same result.
+struct QueryMemo {
+  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  double others_sq = 0.0;      // every point but `closest` was at least this far [m²]
+  std::size_t closest = kNone;  // found within the bound of that search, or kNone
+  std::size_t hint = kNone;     // the last closest point found, kept across misses
+  bool valid = false;
+
+  // The closest point strictly within `radius` of p, as KdTree::FindClosest finds it;
+  // `*searched` says whether the tree was searched.
+  Neighbor Lookup(const KdTree& tree, const std::vector<Eigen::Vector3d>& to,
+                  const Eigen::Vector3d& p, double radius, bool reuse, bool* searched) {
+    *searched = false;
+    if (valid && reuse) {
+      // Every other point is now at least √others_sq − δ away (triangle inequality); a small
+      // relative margin keeps rounding from deciding a near tie.
+      const double moved = (p - at).norm();
+      const double others = (std::sqrt(others_sq) - moved) * (1.0 - 1e-9);
+      if (closest == kNone) {
+        if (radius <= others) return Neighbor{};  // nothing can be within the bound
+      } else {
+        const double d_sq = (to[closest] - p).squaredNorm();
+        if (std::sqrt(d_sq) < others) {
+          if (d_sq < radius * radius) return Neighbor{true, closest, d_sq};
+          return Neighbor{};
+        }
+      }
+    }
+    *searched = true;
+    const Neighbor nb = tree.FindClosest(p, radius, hint, &others_sq);
+    at = p;
+    closest = nb.found ? nb.index : kNone;
+    if (nb.found) hint = nb.index;
+    valid = true;
+    return nb;
+  }
+};
+
 // Closest points in `to` of every `step`-th `from` point listed in `queries`, mapped by
 // T_to_from, within `dmax`, then the orientation test (Zhang 1994, §4.1 and §4.2).
-// `hints` holds, per point of `from`, its previous closest point in `to` (warm start for the
-// bounded search, updated here); the result does not depend on it. With `need_orientations`
+// `memos` holds, per point of `from`, what its last search found (QueryMemo, updated here);
+// the result does not depend on it; `*searches` counts the tree searches. With `need_orientations`
 // the matched `to` points' orientations are made available (the queried `from` points' must
 // already be, for the orientation test). Returns how many pairs the orientation test rejected.
 std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
                            const Eigen::Isometry3d& T_to_from, double dmax,
                            const PoseSpread& spread, const OrientationTest& orientation_test,
                            const std::vector<std::size_t>& queries, std::size_t step, bool backward,
-                           bool need_orientations, std::vector<std::size_t>* hints,
-                           std::vector<Match>* out) {
+                           bool need_orientations, bool reuse, std::vector<QueryMemo>* memos,
+                           std::vector<Match>* out, std::size_t* searches) {
   const auto& pts = from.cloud().points;
   const long count = static_cast<long>((queries.size() + step - 1) / step);
   std::vector<Match> local(static_cast<std::size_t>(count));
@@ -132,18 +175,22 @@ std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
   // Here source_index is the `from` point and target_index the `to` point.
   // A parallel region costs more than a few hundred queries (curves: 200 points); a coarse
   // iteration's 1 500 queries already gain from it.
-#pragma omp parallel for schedule(dynamic, 128) if (count > 256)
+  std::size_t searched_total = 0;
+#pragma omp parallel for schedule(dynamic, 128) if (count > 256) reduction(+ : searched_total)
   for (long q = 0; q < count; ++q) {
     const std::size_t i = queries[static_cast<std::size_t>(q) * step];
     const Eigen::Vector3d p = T_to_from * pts[i];
-    const Neighbor nb =
-        tree.FindClosest(p, spread.Radius(p, dmax, kSeedGateSearchSigmas), (*hints)[i]);
+    bool searched = false;
+    const Neighbor nb = (*memos)[i].Lookup(
+        tree, to.cloud().points, p, spread.Radius(p, dmax, kSeedGateSearchSigmas), reuse,
+        &searched);
+    searched_total += searched;
     if (!nb.found) continue;
-    (*hints)[i] = nb.index;
     local[static_cast<std::size_t>(q)] =
         Match{i, nb.index, std::sqrt(nb.squared_distance), backward};
     valid[static_cast<std::size_t>(q)] = 1;
   }
+  if (searches != nullptr) *searches += searched_total;
   std::size_t found = 0;
   for (std::size_t k = 0; k < local.size(); ++k)
     if (valid[k]) local[found++] = local[k];
@@ -618,9 +665,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   double coarse_rejected_fraction = 0.0;  // of the pairs found, in the last coarse iteration
 
   Eigen::Isometry3d T = T_init;
-  constexpr std::size_t kNoHint = std::numeric_limits<std::size_t>::max();
-  std::vector<std::size_t> forward_hints(source.cloud().size(), kNoHint);
-  std::vector<std::size_t> backward_hints(symmetric ? target.cloud().size() : 0, kNoHint);
+  std::vector<QueryMemo> forward_memos(source.cloud().size());
+  std::vector<QueryMemo> backward_memos(symmetric ? target.cloud().size() : 0);
   std::vector<Match> matches;
   std::vector<double> distances, weights;
   std::vector<WeightedPair> pairs;
@@ -663,17 +709,20 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     }
 
     // a. Closest points within Dmax, both ways for the symmetric criterion.
-    std::size_t orientation_rejected = 0;
+    std::size_t orientation_rejected = 0, searches = 0;
     auto match = [&] {
       matches.clear();
       orientation_rejected =
           MatchDirection(source, target, T, dmax, spread, orientation_test, source_sample, step,
-                         false, need_orientations, &forward_hints, &matches);
+                         false, need_orientations,
+                         options.reuse_closest_points, &forward_memos, &matches, &searches);
       std::size_t n = (source_sample.size() + step - 1) / step;
       if (symmetric) {
         orientation_rejected +=
             MatchDirection(target, source, T.inverse(), dmax, spread, orientation_test,
-                           target_sample, step, true, need_orientations, &backward_hints, &matches);
+                           target_sample, step, true, need_orientations,
+                           options.reuse_closest_points, &backward_memos, &matches,
+                           &searches);
         n += (target_sample.size() + step - 1) / step;
       }
       distances.clear();
@@ -719,6 +768,7 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
     IterationTrace trace;
     trace.iteration = it;
     trace.queries = rejected ? 2 * queries : queries;  // a rejected extrapolation matched twice
+    trace.searches = searches;
     trace.pairs_found = distances.size();
     trace.pairs_rejected_by_orientation = orientation_rejected;
     if (coarse)
@@ -825,7 +875,8 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
   // Final pairs at the final estimate: inliers, RMS, information.
   matches.clear();
   MatchDirection(source, target, T, dmax, PoseSpread(), orientation_test, source_sample, 1, false,
-                 need_orientations, &forward_hints, &matches);
+                 need_orientations,
+                         options.reuse_closest_points, &forward_memos, &matches, nullptr);
   KeepWithinGate(source, target, T, dmax, sampling_variance, PoseSpread(), options, &matches,
                  &weights);
   const std::size_t kept = matches.size();

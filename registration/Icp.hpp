@@ -78,6 +78,9 @@ const char* ToString(RegistrationStatus status);
 struct IterationTrace {
   int iteration = 0;
   std::size_t queries = 0;      ///< closest-point queries (sampled points used, both ways)
+  /// k-d tree searches those queries ran: a query point that moved less than half the gap to
+  /// its second closest point since its last search keeps its closest point without one
+  std::size_t searches = 0;
   std::size_t pairs_found = 0;  ///< pairs within the previous Dmax (and orientation test)
   std::size_t pairs_kept = 0;   ///< pairs after the new Dmax or the Mahalanobis gate
   std::size_t pairs_rejected_by_orientation = 0;  ///< within Dmax, failed the orientation test

@@ -164,6 +164,37 @@ Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance,
   return result;
 }
 
+Neighbor KdTree::FindClosest(const Eigen::Vector3d& query, double max_distance, std::size_t hint,
+                             double* others_squared_distance) const {
+  Neighbor result;
+  const double bound_sq = std::isinf(max_distance) ? std::numeric_limits<double>::infinity()
+                                                   : max_distance * max_distance;
+  *others_squared_distance = bound_sq;
+  if (size() == 0 || !(max_distance > 0.0)) return result;
+  double best_sq = bound_sq;
+  double& second_sq = *others_squared_distance;
+  auto visit = [&](double d_sq, std::size_t index) {
+    if (result.found && index == result.index) {
+      // The hint met again in its leaf: the same point, perhaps an ulp closer (as above).
+      best_sq = std::min(best_sq, d_sq);
+      return;
+    }
+    if (d_sq < best_sq) {
+      if (result.found) second_sq = best_sq;
+      best_sq = d_sq;
+      result.index = index;
+      result.found = true;
+    } else if (d_sq < second_sq) {
+      second_sq = d_sq;
+    }
+  };
+  if (hint < size()) visit((impl_->points[hint] - query).squaredNorm(), hint);
+  // Cells beyond the second closest cannot change either answer.
+  impl_->Search(query, visit, [&] { return second_sq; });
+  if (result.found) result.squared_distance = best_sq;
+  return result;
+}
+
 std::size_t KdTree::FindKNearest(const Eigen::Vector3d& query, std::size_t k, std::size_t* indices,
                                  double* squared_distances) const {
   k = std::min(k, size());

@@ -40,6 +40,14 @@ class KdTree {
   /// equidistant points the hint may be returned). An out-of-range hint is ignored.
   Neighbor FindClosest(const Eigen::Vector3d& query, double max_distance, std::size_t hint) const;
 
+  /// The same closest point, and a lower bound on the distance of every other point
+  /// (`*others_squared_distance` [m²]): the second closest's squared distance, or
+  /// max_distance² when no other point lies within the bound. A query point that then moves
+  /// by δ keeps the same closest point while its distance to it stays below √others − δ
+  /// (triangle inequality), so the caller may skip the next search (QueryMemo in Icp.cpp).
+  Neighbor FindClosest(const Eigen::Vector3d& query, double max_distance, std::size_t hint,
+                       double* others_squared_distance) const;
+
   /// The k nearest points (fewer if the set is smaller), closest first.
   std::vector<Neighbor> FindKNearest(const Eigen::Vector3d& query, std::size_t k) const;
 

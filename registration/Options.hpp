@@ -115,6 +115,12 @@ struct RegistrationOptions {
 
   /// Fewer pairs than this after gating ends the loop with a failure status [count].
   int min_pairs = 6;
+
+  /// Skip the k-d tree search of a query point that moved less than half the gap between its
+  /// closest and second closest points since its last search: its closest point cannot have
+  /// changed, so the result is the same either way (IterationTrace::searches counts the
+  /// searches). Off only to compare with the plain search (tests, bench_register).
+  bool reuse_closest_points = true;
 };
 
 /// The residual the matcher minimises: `residual`, or with kAuto the one the geometry

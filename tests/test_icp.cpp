@@ -462,3 +462,62 @@ TEST(Icp, VoxelSampleIsUsedAndReported) {
   EXPECT_LT(rot, 0.15);
   EXPECT_LT(trans, 0.015);
 }
+
+// Reusing a query's closest point while it moved less than half the gap to its second closest
+// (QueryMemo) changes nothing: the same pairs every iteration, so the same trace and the same
+// estimate to the bit, on terrain (point-to-plane), stereo-like range noise with covariances and
+// the seed gate open, the symmetric criterion and curves (point-to-point); and it skips most
+// of the late iterations' searches, where the points move by far less than the sample spacing.
+TEST(Icp, ReusedClosestPointsGiveTheSameRegistration) {
+  struct Case {
+    const char* name;
+    ScenePair pair;
+    RegistrationOptions options;
+    Eigen::Isometry3d init;
+  };
+  std::vector<Case> cases;
+  {
+    const ScenePair p = MakeTerrainPair(Terrain(1));
+    cases.push_back({"terrain", p, RegistrationOptions{}, Perturb(p.T_target_source, 2.0, 0.10)});
+  }
+  {
+    const ScenePair p = RangeNoiseTerrain(2);
+    RegistrationOptions o;
+    o.use_uncertainty = true;
+    o.seed_rotation_sigma_deg = 1.0;
+    o.seed_translation_sigma_m = 0.05;
+    cases.push_back({"range noise, seed gate", p, o, Perturb(p.T_target_source, 1.0, 0.05)});
+  }
+  {
+    const ScenePair p = MakeTerrainPair(Terrain(3));
+    RegistrationOptions o;
+    o.criterion = Criterion::kSymmetric;
+    cases.push_back({"symmetric", p, o, Perturb(p.T_target_source, 2.0, 0.10)});
+  }
+  {
+    const ScenePair p = Curves(4);
+    cases.push_back({"curves", p, CurveOptions(), Perturb(p.T_target_source, 3.0, 0.05)});
+  }
+  for (Case& c : cases) {
+    RegistrationOptions plain = c.options;
+    plain.reuse_closest_points = false;
+    const RegistrationResult reused = Register(c.pair.source, c.pair.target, c.init, c.options);
+    const RegistrationResult searched = Register(c.pair.source, c.pair.target, c.init, plain);
+    ASSERT_TRUE(reused.converged) << c.name;
+    EXPECT_TRUE(reused.T_target_source.matrix() == searched.T_target_source.matrix()) << c.name;
+    ASSERT_EQ(reused.trace.size(), searched.trace.size()) << c.name;
+    for (std::size_t k = 0; k < reused.trace.size(); ++k) {
+      const IterationTrace& a = reused.trace[k];
+      const IterationTrace& b = searched.trace[k];
+      EXPECT_EQ(a.pairs_found, b.pairs_found) << c.name << ", iteration " << a.iteration;
+      EXPECT_EQ(a.pairs_kept, b.pairs_kept) << c.name << ", iteration " << a.iteration;
+      EXPECT_EQ(a.dmax_m, b.dmax_m) << c.name << ", iteration " << a.iteration;
+      EXPECT_EQ(b.searches, b.queries) << c.name;  // the plain search: one per query
+    }
+    EXPECT_TRUE(reused.information == searched.information) << c.name;
+    EXPECT_EQ(reused.trace.front().searches, reused.trace.front().queries) << c.name;
+    const IterationTrace& last = reused.trace.back();
+    EXPECT_LT(last.searches, last.queries / 2) << c.name << ": " << last.searches << " of "
+                                               << last.queries;
+  }
+}

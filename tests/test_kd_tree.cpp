@@ -214,3 +214,45 @@ TEST(KdTree, CountWithinMatchesBruteForce) {
   EXPECT_EQ(tree.CountWithin(Eigen::Vector3d(0, 0, 0), -1.0, 5), 0u);
   EXPECT_EQ(KdTree(Points()).CountWithin(Eigen::Vector3d::Zero(), 1.0, 5), 0u);
 }
+
+// The closest point and the bound on every other point's distance, against brute force: the
+// second smallest squared distance within the bound, else the bound² (duplicates included,
+// where the second closest lies at the same distance, and hints on and off the answer).
+TEST(KdTree, OthersBoundMatchesBruteForce) {
+  std::mt19937 rng(8);
+  Points dense = RandomCloud(rng, 5000, 1.0);
+  const Points base = RandomCloud(rng, 50, 1.0);
+  Points duplicated;
+  for (int copy = 0; copy < 3; ++copy)
+    duplicated.insert(duplicated.end(), base.begin(), base.end());
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (const Points* pts : {&dense, &duplicated}) {
+    const KdTree tree(*pts);
+    for (int q = 0; q < 300; ++q) {
+      const Eigen::Vector3d query(u(rng), u(rng), u(rng));
+      for (const double bound : {0.01, 0.08, 0.5, std::numeric_limits<double>::infinity()}) {
+        const Neighbor expected = BruteClosest(*pts, query, bound);
+        double second_sq = bound * bound;
+        for (std::size_t i = 0; i < pts->size(); ++i) {
+          const double d = ((*pts)[i] - query).squaredNorm();
+          if (expected.found && i == expected.index) continue;
+          second_sq = std::min(second_sq, d);
+        }
+        for (const std::size_t hint :
+             {std::numeric_limits<std::size_t>::max(), expected.index,
+              static_cast<std::size_t>(q) % pts->size()}) {
+          double others_sq = -1.0;
+          const Neighbor got = tree.FindClosest(query, bound, hint, &others_sq);
+          ASSERT_EQ(got.found, expected.found) << "bound " << bound;
+          EXPECT_DOUBLE_EQ(others_sq, second_sq) << "bound " << bound << ", hint " << hint;
+          if (!expected.found) continue;
+          EXPECT_DOUBLE_EQ(got.squared_distance, expected.squared_distance);
+          EXPECT_LE(got.squared_distance, others_sq);
+        }
+      }
+    }
+  }
+  double others_sq = 0.0;
+  EXPECT_FALSE(KdTree(Points()).FindClosest(Eigen::Vector3d::Zero(), 1.0, 0, &others_sq).found);
+  EXPECT_DOUBLE_EQ(others_sq, 1.0);
+}
