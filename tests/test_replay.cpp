@@ -1,5 +1,5 @@
-// `rovermap replay` end to end: the DESIGN §6 output set on the bundled tiny sequences, drift
-// against ground truth on simulated traverses (cloud and stereo), the DEM against the
+// `rovermap replay` end to end: the docs/design.md §6 output set on the bundled tiny sequences,
+// drift against ground truth on simulated traverses (cloud and stereo), the DEM against the
 // simulator's true terrain, determinism, the per-direction fallback on flat ground, corrupted
 // frames skipped, and bad sequences refused before any output.
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
-// What a biased dead reckoning leaves in the registered trajectory (issue 31, DESIGN §10). A
-// wheeled or skid-steer rover's heading drifts by tenths of a degree per metre; seeds made from
-// the ground truth with such a drift (sim::DeadReckoningFromTruth) must register to the same
+// What a biased dead reckoning leaves in the registered trajectory (issue 31, docs/design.md
+// §10). A wheeled or skid-steer rover's heading drifts by tenths of a degree per metre; seeds made
+// from the ground truth with such a drift (sim::DeadReckoningFromTruth) must register to the same
 // increments as the ground truth itself: per-frame heading error within 0.02° of the
 // truth-seeded replay's mean, ATE (aligned at the first pose) within 1.2× of it.
 //
