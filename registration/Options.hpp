@@ -66,13 +66,13 @@ struct RegistrationOptions {
   /// fitted to (CloudGeometry: NormalSpread, EstimateTangents) [count of σ]; 0 = the plain
   /// test (the paper). Noisy tangents otherwise reject good pairs at random.
   double orientation_spread_sigmas = 1.5;
-  /// The staged orientation test (issue 12): when the source's orientations must be estimated
-  /// (PCA normals: no normals given), the first `coarse_iterations` run on the coarse subset
-  /// (every `coarse_step`-th sampled point) as with coarse_to_fine, and the test is kept for
-  /// the fine stage only if it rejected at least `orientation_min_rejected` of the pairs found
-  /// in the last coarse iteration. Clean scans then need source normals for the coarse subset
-  /// only. Sources with given normals (stereo) are left as they were. With coarse_to_fine the
-  /// test is staged the same way whatever the normals.
+  /// The staged orientation test: when the source's orientations must be estimated (PCA normals: no
+  /// normals given), the first `coarse_iterations` run on the coarse subset (every `coarse_step`-th
+  /// sampled point) as with coarse_to_fine, and the test is kept for the fine stage only if it
+  /// rejected at least `orientation_min_rejected` of the pairs found in the last coarse iteration.
+  /// Clean scans then need source normals for the coarse subset only. Sources with given normals
+  /// (stereo) are left as they were. With coarse_to_fine the test is staged the same way whatever
+  /// the normals.
   bool staged_orientation_test = true;
   /// [ratio]; 0 = the staged test is always kept.
   double orientation_min_rejected = 0.006;
