@@ -15,10 +15,10 @@ enum class Solver { kSvd, kDualQuaternion };
 /// (a curve has no normal to project on); see EffectiveResidual.
 enum class Residual { kAuto, kPointToPoint, kPointToPlane };
 /// Stopping test. kRelative is the paper's 1 % test on r and t; kAbsolute stops when
-/// the step is below fixed tolerances in metres and degrees (see ALGORITHM.md,
-/// "Known weakness").
+/// the step is below fixed tolerances in metres and degrees (docs/design.md §1, "Known
+/// weakness").
 enum class Convergence { kRelative, kAbsolute };
-/// Acceleration of the iterates (ALGORITHM.md, "Known weakness"): Anderson extrapolation of
+/// Acceleration of the iterates (docs/design.md §1, "Known weakness"): Anderson extrapolation of
 /// the pose with an energy safeguard (AA-ICP, Pavlov et al. 2018), or none (the paper).
 /// kAuto: Anderson for point-to-point, which creeps; none for point-to-plane, whose
 /// Gauss-Newton steps it only disturbed (measured: more iterations, half the extrapolations

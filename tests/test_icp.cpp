@@ -164,7 +164,7 @@ TEST(Icp, PointToPointReducesTerrainErrorAndDmaxNeverIncreases) {
     EXPECT_LE(r.trace[k].dmax_m, r.trace[k - 1].dmax_m) << "iteration " << k + 1;
 }
 
-// ALGORITHM.md, "Known weakness": the paper's 1 % relative test stops point-to-point
+// docs/design.md §1, "Known weakness": the paper's 1 % relative test stops point-to-point
 // after a handful of iterations far from the optimum; the default absolute test goes on.
 TEST(Icp, RelativeStoppingTestStopsEarly) {
   const ScenePair p = MakeTerrainPair(Terrain(5));
@@ -311,7 +311,7 @@ TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
   EXPECT_LT(error_weighted, 0.75 * error_plain);
 }
 
-// Anderson acceleration (ALGORITHM.md, "Known weakness"): point-to-point creeps along the
+// Anderson acceleration (docs/design.md §1, "Known weakness"): point-to-point creeps along the
 // smooth terrain; extrapolating the pose reaches the same fixed point in far fewer iterations
 // (measured: 43–60 against 116–188), and the energy safeguard rejects the bad extrapolations.
 TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {
