@@ -1,5 +1,5 @@
 // What every subcommand shares: its --config/--set options, and typed errors turned into
-// messages and exit statuses (DESIGN.md §5). Linked into both programs (apps/Launcher.cpp).
+// messages and exit statuses (docs/design.md §5). Linked into both programs (apps/Launcher.cpp).
 #include <iostream>
 
 #include "apps/Commands.hpp"

@@ -14,7 +14,7 @@
 
 namespace rovermap::apps {
 
-/// Exit statuses (DESIGN.md §5).
+/// Exit statuses (docs/design.md §5).
 constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;  ///< bad input data, failed registration, I/O
 constexpr int kExitUsage = 2;    ///< usage or config error
@@ -70,7 +70,7 @@ int RunSimulate(const SimulateArgs& args);
 
 struct ReplayArgs {
   ConfigArgs config;
-  std::string sequence;  ///< sequence directory (DESIGN.md §4) or ROS 1 bag
+  std::string sequence;  ///< sequence directory (docs/design.md §4) or ROS 1 bag
   std::string out;       ///< output directory
   bool force = false;    ///< write into a non-empty directory
 };
@@ -124,7 +124,7 @@ CLI::App* AddCampaignTaskCommand(CLI::App* app, CampaignTaskArgs* args);
 int RunCampaignTask(const CampaignTaskArgs& args);
 
 /// Runs `command`, turning the typed errors into a message on stderr and the exit status of
-/// DESIGN §5, as main does; the message (without "rovermap: ") also goes to `message`.
+/// docs/design.md §5, as main does; the message (without "rovermap: ") also goes to `message`.
 int RunReportingErrors(const std::function<int()>& command, std::string* message = nullptr);
 
 /// Opens a recording (io::OpenFrameSource with the `bag.` options) and tells stderr, as
@@ -134,7 +134,7 @@ std::unique_ptr<io::FrameSource> OpenRecording(const std::string& path, const co
 
 struct ServeArgs {
   ConfigArgs config;
-  std::string inbox;  ///< inbox directory (DESIGN.md §7)
+  std::string inbox;  ///< inbox directory (docs/design.md §7)
   std::string out;    ///< output directory (holds the checkpoint and the lock)
 };
 CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args);

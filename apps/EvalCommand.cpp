@@ -1,5 +1,5 @@
 // `rovermap eval`: trajectory metrics (--estimate ... --groundtruth) or DEM accuracy (--dem
-// --reference) as one JSON object (DESIGN.md §8); a thin layer over eval/.
+// --reference) as one JSON object (docs/design.md §8); a thin layer over eval/.
 #include <algorithm>
 #include <filesystem>
 #include <iostream>

@@ -1,5 +1,5 @@
 // `rovermap import RECORDING --out SEQ`: a recording (a ROS bag) as a sequence directory
-// (DESIGN.md §4), written into a temporary sibling and renamed into place, so that a failure
+// (docs/design.md §4), written into a temporary sibling and renamed into place, so that a failure
 // leaves no half-written SEQ.
 #include <stdlib.h>
 #include <unistd.h>
@@ -63,7 +63,7 @@ std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir,
       ++unreadable;
       continue;
     }
-    // A sequence's PLY holds the finite points (DESIGN.md §4); the rest are counted.
+    // A sequence's PLY holds the finite points (docs/design.md §4); the rest are counted.
     *dropped_nonfinite += mapper::DropNonFinite(&frame.cloud);
     io::WriteFrameData(dir / "frames" / io::FrameStem(odometry.size()), info, frame);
     odometry.push_back(source->odometry()[frame.index]);
@@ -84,7 +84,7 @@ std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir,
                            : (info.frame_rate_hz > 0.0 ? info.frame_rate_hz : 1.0);
   io::WriteSequenceYaml(dir, info,
                         "Imported by rovermap import from " + info.directory.filename().string() +
-                            ": DESIGN.md section 4.");
+                            ": docs/design.md section 4.");
   io::WriteTum(dir / "odometry.tum", odometry);
   if (!truth.empty()) io::WriteTum(dir / "groundtruth.tum", truth);
   io::SyncDirectory(dir);

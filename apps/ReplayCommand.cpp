@@ -105,7 +105,7 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
       "Run the mapping pipeline over a recorded sequence or ROS bag: registered trajectory, DEM, "
       "OctoMap and drift report");
   cmd->add_option("sequence", args->sequence,
-                  "Sequence directory (DESIGN.md section 4) or ROS 1 bag (.bag; options under "
+                  "Sequence directory (docs/design.md section 4) or ROS 1 bag (.bag; options under "
                   "bag. in the config)")
       ->required();
   cmd->add_option("--out", args->out, "Output directory (created)")->required();

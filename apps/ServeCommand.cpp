@@ -1,4 +1,4 @@
-// `rovermap serve --inbox DIR --out DIR`: the daemon (DESIGN §7).
+// `rovermap serve --inbox DIR --out DIR`: the daemon (docs/design.md §7).
 #include <signal.h>
 #include <unistd.h>
 
@@ -62,7 +62,7 @@ mapper::FaultHook FaultFromEnvironment() {
 CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args) {
   CLI::App* cmd = app->add_subcommand(
       "serve", "Run the mapping pipeline as a daemon on frames dropped into an inbox");
-  cmd->add_option("--inbox", args->inbox, "Inbox directory (DESIGN.md section 7)")->required();
+  cmd->add_option("--inbox", args->inbox, "Inbox directory (docs/design.md section 7)")->required();
   cmd->add_option("--out", args->out, "Output directory (created; holds the checkpoint)")
       ->required();
   AddConfigOptions(cmd, &args->config);
@@ -104,7 +104,7 @@ int RunServe(const ServeArgs& args) {
   try {
     if (!daemon.WaitForSequence(g_stop)) return kExitOk;
   } catch (const io::IoError& e) {
-    throw UsageError(e.what());  // a bad sequence.yaml: exit 2 (DESIGN §5, §7)
+    throw UsageError(e.what());  // a bad sequence.yaml: exit 2 (docs/design.md §5, §7)
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
   }

@@ -1,4 +1,4 @@
-// `rovermap simulate --out DIR`: a synthetic sequence (DESIGN.md §4) with ground truth.
+// `rovermap simulate --out DIR`: a synthetic sequence (docs/design.md §4) with ground truth.
 #include <unistd.h>
 
 #include <chrono>

@@ -1,6 +1,6 @@
 // rovermap-full, the program behind the `rovermap` command (apps/Launcher.cpp runs it for every
 // subcommand but a plain `register`): parses the command line, runs one subcommand, and turns
-// typed errors into messages and exit statuses (DESIGN.md §5).
+// typed errors into messages and exit statuses (docs/design.md §5).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>

@@ -1,7 +1,7 @@
-// bench_cold: one registration per process, as a user runs it, against Open3D's point-to-plane
-// ICP run the same way (issue 32: "a cold process as fast as a warm one"). Each run starts a
-// fresh process and is timed from fork to exit: loading the program and its libraries, reading
-// the two PLY files, the registration and printing the result.
+// bench_cold: one registration per process, as a user runs it, against Open3D's point-to-plane ICP
+// run the same way (the aim: a cold process as fast as a warm one). Each run starts a fresh process
+// and is timed from fork to exit: loading the program and its libraries, reading the two PLY files,
+// the registration and printing the result.
 //
 //   bench_cold [--runs N] [--data DIR] [--rovermap PATH] [--open3d PATH] [--pause-ms MS]
 //

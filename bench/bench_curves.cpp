@@ -81,8 +81,8 @@ int main(int argc, char** argv) {
         failures += r.failures;
         std::printf(" %.2f | %.2f |", 100 * r.rotation_error, 100 * r.translation_error);
       }
-      // The paper's cells quoted in issue 12 (σ = 8: 11.35 % and 8.52 % rotation); the rest of
-      // its table was not found.
+      // The paper's own cells (σ = 8: 11.35 % and 8.52 % rotation); the rest of its table was not
+      // found.
       if (sigma_cm == 8) {
         std::printf(" %s | ? |", symmetric ? "8.52" : "11.35");
       } else {

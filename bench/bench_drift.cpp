@@ -1,7 +1,8 @@
-// bench_drift: the drift anchor of DESIGN.md §10. Frame to frame over simulated cloud sequences,
-// every method seeded by the same dead-reckoning increments and chained from odometry pose 0:
-// rovermap's pipeline (mapper::Mapper, defaults; and mapper.reference = local_map) against
-// Open3D's point-to-plane ICP and Generalized-ICP. Built only with -DROVERMAP_BENCH_PEERS=ON.
+// bench_drift: the drift anchor of docs/design.md §10. Frame to frame over simulated cloud
+// sequences, every method seeded by the same dead-reckoning increments and chained from odometry
+// pose 0: rovermap's pipeline (mapper::Mapper, defaults; and mapper.reference = local_map)
+// against Open3D's point-to-plane ICP and Generalized-ICP. Built only with
+// -DROVERMAP_BENCH_PEERS=ON.
 //
 //   bench_drift [--frames N] [--long N] [--gate-factor F | --gate-m M] [--max-iterations N]
 //               [--repeats N] [--dump DIR]

@@ -75,7 +75,7 @@ pid=$!
 sample $pid "$W/replay.log" "^replay: frame " "$W/replay.samples"
 wait $pid
 
-# serve: an inbox holding every frame, as a producer leaves them (DESIGN §7)
+# serve: an inbox holding every frame, as a producer leaves them (docs/design.md §7)
 mkdir -p "$W/inbox/frames"
 cp "$W/seq/sequence.yaml" "$W/inbox/"
 awk '!/^#/' "$W/seq/odometry.tum" | split -l 1 -d -a 6 - "$W/inbox/frames/x"

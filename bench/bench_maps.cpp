@@ -1,6 +1,6 @@
-// Benchmarks of the map products (issue 4): DEM fusion throughput (points/s, one core),
-// OctoMap insertion per stereo-sized frame at 0.1 and 0.05 m, GeoTIFF write of a 2000×2000
-// map, and memory and per-frame cost over a long synthetic traverse.
+// Benchmarks of the map products: DEM fusion throughput (points/s, one core), OctoMap insertion per
+// stereo-sized frame at 0.1 and 0.05 m, GeoTIFF write of a 2000×2000 map, and memory and per-frame
+// cost over a long synthetic traverse.
 //   build/bench/bench_maps [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>

@@ -1,6 +1,6 @@
-// bench_seed: what a biased dead reckoning leaves in the registered trajectory (DESIGN §10: a
-// seed biased in heading or scale changes the result by no more than the registration's own
-// noise). Each sequence's frames are loaded once; the pipeline (defaults, or --config / --set)
+// bench_seed: what a biased dead reckoning leaves in the registered trajectory (docs/design.md
+// §10: a seed biased in heading or scale changes the result by no more than the registration's
+// own noise). Each sequence's frames are loaded once; the pipeline (defaults, or --config / --set)
 // then runs from seeds made from the ground truth by a wheeled rover's error model
 // (sim::DeadReckoningFromTruth: heading bias per metre, scale error, noise), from the truth
 // itself and from the sequence's own odometry.

@@ -29,7 +29,7 @@ now() { date +%s.%N; }
 calc() { awk "BEGIN { print $1 }"; }  # awk is in every Debian; bc is not
 median() { sort -g | awk '{v[NR]=$1} END {print (NR%2) ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2}'; }
 
-# An inbox holding frames 0..N-1 of SEQ, as a producer leaves them (DESIGN §7).
+# An inbox holding frames 0..N-1 of SEQ, as a producer leaves them (docs/design.md §7).
 make_inbox() {
   local seq=$1 inbox=$2 n=$3
   rm -rf "$inbox"; mkdir -p "$inbox/frames"

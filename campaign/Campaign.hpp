@@ -44,7 +44,7 @@ std::string CampaignPlanJson(const CampaignPlan& plan);
 /// @throw std::runtime_error naming `file` if the text is not a campaign plan.
 CampaignPlan ParseCampaignPlan(const std::string& text, const std::filesystem::path& file);
 
-/// The campaign folder's layout (DESIGN-style contract, documented in the README).
+/// The campaign folder's layout (a contract: docs/design.md §13).
 class CampaignLayout {
  public:
   explicit CampaignLayout(std::filesystem::path dir) : dir_(std::move(dir)) {}

@@ -25,7 +25,7 @@ namespace rovermap::config {
 /// origin.
 struct BagConfig : io::BagOptions {
   std::vector<double> T_body_sensor_translation = {0.0, 0.0, 0.0};  ///< [m] x y z
-  /// [deg] R_body_sensor = Rz(y)·Ry(p)·Rx(r) (DESIGN §4): a level, forward-looking camera.
+  /// [deg] R_body_sensor = Rz(y)·Ry(p)·Rx(r) (docs/design.md §4): a level, forward-looking camera.
   std::vector<double> T_body_sensor_rpy_deg = {-90.0, 0.0, -90.0};
   double origin_latitude_deg = 0.0;   ///< [deg]
   double origin_longitude_deg = 0.0;  ///< [deg]

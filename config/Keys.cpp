@@ -50,7 +50,7 @@ const EnumNames<std::string> kBodyNames = {{"earth", "earth"}, {"moon", "moon"},
 const EnumNames<sim::SensorKind> kSensorKindNames = {{"stereo", sim::SensorKind::kStereo},
                                                      {"cloud", sim::SensorKind::kCloud}};
 
-// The table. Key names follow the struct fields, except where DESIGN.md §5 fixes the contract
+// The table. Key names follow the struct fields, except where docs/design.md §5 fixes the contract
 // name (reference_distance). One line per key; DumpYaml and default.yaml follow this order.
 std::vector<KeyEntry> BuildRegistry() {
   std::vector<KeyEntry> keys;

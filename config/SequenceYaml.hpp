@@ -1,5 +1,5 @@
 #pragma once
-// sequence.yaml (DESIGN.md §4) read into a plain struct. Only config/ sees YAML; io/Sequence
+// sequence.yaml (docs/design.md §4) read into a plain struct. Only config/ sees YAML; io/Sequence
 // turns this into the sequence's typed description and checks it against the other files.
 
 #include <array>
@@ -29,9 +29,9 @@ struct SequenceYaml {
 
 /// Reads and checks `path` (a sequence.yaml).
 /// @throw ConfigError "FILE:LINE: KEY: reason" if the file is missing or not YAML, a required
-///        key is missing, a key is unknown (DESIGN §4: unknown keys are an error), a value has
-///        the wrong type or is out of range (non-positive focal length, baseline, size or frame
-///        rate; principal point outside the image; latitude/longitude out of range; a
+///        key is missing, a key is unknown (docs/design.md §4: unknown keys are an error), a
+///        value has the wrong type or is out of range (non-positive focal length, baseline, size
+///        or frame rate; principal point outside the image; latitude/longitude out of range; a
 ///        quaternion that is not unit length within 1e-3; both or neither of rotation_rpy_deg
 ///        and quaternion), or a stereo sequence has no camera.
 SequenceYaml ReadSequenceYaml(const std::filesystem::path& path);

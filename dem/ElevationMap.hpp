@@ -1,7 +1,7 @@
 #pragma once
 // The elevation grid: sparse 256×256-cell tiles allocated on first touch (GridIndex), six
-// layers per cell, and per-cell two-hypothesis Kalman fusion of registered points (DESIGN §3,
-// §9, §9a).
+// layers per cell, and per-cell two-hypothesis Kalman fusion of registered points
+// (docs/design.md §3, §9, §9a).
 //
 // Grid frame. Cells are laid out in a horizontal frame rotated from the world (ENU) frame by
 // `grid_rotation_rad` (counter-clockwise about z): p_grid = R(θ)·(x_world, y_world). The map
@@ -9,11 +9,12 @@
 // projection north and the GeoTIFF needs no resampling (io/Georeference.hpp); θ = 0 is plain ENU.
 // Heights are world z (metres above the origin's altitude) in every frame.
 //
-// Fusion (DESIGN §9a: 1–2 % of stereo points are mismatches off the surface along their ray, and
-// a spike reads as a rock). Each cell holds two height hypotheses: the primary (the estimate
-// published as elevation, variance, count, min, max and last frame; and its start frame) and a
-// candidate (height, variance, count, start frame). A point with height z and variance r, against a
-// hypothesis (h, σ²), passes the gate when d² = (z − h)² / (σ² + r) <= `mahalanobis_gate`:
+// Fusion (docs/design.md §9a: 1–2 % of stereo points are mismatches off the surface along their
+// ray, and a spike reads as a rock). Each cell holds two height hypotheses: the primary (the
+// estimate published as elevation, variance, count, min, max and last frame; and its start frame)
+// and a candidate (height, variance, count, start frame). A point with height z and variance r,
+// against a hypothesis (h, σ²), passes the gate when d² = (z − h)² / (σ² + r) <=
+// `mahalanobis_gate`:
 //  - empty cell: the point starts the primary (h = z, σ² = r);
 //  - within the gate of the primary: Kalman update of the primary,
 //    h += K(z − h), σ² = (1 − K)σ², K = σ² / (σ² + r);

@@ -1,6 +1,6 @@
 #pragma once
 // DEM accuracy against a reference terrain (`rovermap eval --dem A.tif --reference B.tif`,
-// DESIGN.md §8): both grids compared where both have data, on the coarser of the two grids.
+// docs/design.md §8): both grids compared where both have data, on the coarser of the two grids.
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -44,8 +44,8 @@ struct DemComparison {
 /// cell with both gives that status and a message naming both files.
 DemComparison CompareDems(const io::DemRaster& dem, const io::DemRaster& reference);
 
-/// rmse_m, bias_m, p95_abs_m, coverage, within_2sigma, cells (DESIGN.md §8) and the rest; NaN →
-/// null.
+/// rmse_m, bias_m, p95_abs_m, coverage, within_2sigma, cells (docs/design.md §8) and the rest;
+/// NaN → null.
 nlohmann::json ToJson(const DemComparison& comparison);
 
 }  // namespace rovermap::eval

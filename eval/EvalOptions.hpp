@@ -1,5 +1,5 @@
 #pragma once
-// Options of the trajectory metrics (DESIGN.md §8); config keys `eval.*` (config/Keys.cpp).
+// Options of the trajectory metrics (docs/design.md §8); config keys `eval.*` (config/Keys.cpp).
 
 #include <vector>
 

@@ -1,6 +1,7 @@
 #pragma once
-// Trajectory files for `rovermap eval`: TUM (`timestamp tx ty tz qx qy qz qw`, DESIGN.md §4) and
-// KITTI odometry poses (12 numbers per line: the row-major 3×4 matrix [R | t] of T_world_body).
+// Trajectory files for `rovermap eval`: TUM (`timestamp tx ty tz qx qy qz qw`, docs/design.md
+// §4) and KITTI odometry poses (12 numbers per line: the row-major 3×4 matrix [R | t] of
+// T_world_body).
 
 #include <Eigen/Geometry>
 #include <filesystem>

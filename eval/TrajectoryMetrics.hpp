@@ -1,7 +1,7 @@
 #pragma once
-// Trajectory metrics of DESIGN.md §8: ATE after SE(3) Umeyama alignment, ATE aligned at the first
-// pose, RPE over a travelled distance, KITTI-style segment errors. No I/O: the replay pipeline
-// and `rovermap eval` both call EvaluateTrajectory / EvaluateAssociated and ToJson.
+// Trajectory metrics of docs/design.md §8: ATE after SE(3) Umeyama alignment, ATE aligned at the
+// first pose, RPE over a travelled distance, KITTI-style segment errors. No I/O: the replay
+// pipeline and `rovermap eval` both call EvaluateTrajectory / EvaluateAssociated and ToJson.
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>

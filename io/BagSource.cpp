@@ -229,7 +229,7 @@ CloudLayout CheckCloud(const sensor_msgs::PointCloud2& msg, const std::string& w
 }
 
 // Every point of a cloud, non-finite ones (no return) included: the mapper drops and counts
-// them, as for a sequence's PLY frames (DESIGN.md §9).
+// them, as for a sequence's PLY frames (docs/design.md §9).
 registration::PointCloud ToCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
   const CloudLayout layout = CheckCloud(msg, what);
   registration::PointCloud cloud;

@@ -1,6 +1,6 @@
 #pragma once
 // What a recording is and what one of its frames holds, wherever they come from (a sequence
-// directory, DESIGN.md §4, or a bag).
+// directory, docs/design.md §4, or a bag).
 
 #include <Eigen/Geometry>
 #include <cstddef>

@@ -76,7 +76,7 @@ class IndexedFrameSource : public FrameSource {
 };
 
 /// Opens the recording at `path`: a ROS 1 bag (a file named *.bag, read by `bag_options`) or a
-/// sequence directory (DESIGN.md §4).
+/// sequence directory (docs/design.md §4).
 /// @throw IoError naming the file (and line) at fault, or saying that this build has no bag
 ///        support (ROVERMAP_WITH_ROSBAG off).
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,

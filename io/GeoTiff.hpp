@@ -1,5 +1,5 @@
 #pragma once
-// dem.tif (DESIGN §6): a Cloud-Optimized GeoTIFF, Float32, north-up; band 1 elevation [m],
+// dem.tif (docs/design.md §6): a Cloud-Optimized GeoTIFF, Float32, north-up; band 1 elevation [m],
 // band 2 elevation standard deviation [m], band 3 point count; nodata NaN; CRS and
 // geotransform from io::Georeference. Written through GDAL: a MEM dataset, then CreateCopy
 // with the COG driver (DEFLATE, floating-point predictor, overviews) to a temporary file in

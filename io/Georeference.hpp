@@ -1,6 +1,6 @@
 #pragma once
-// Where the local ENU world frame (DESIGN §3) lies on its body, and the projected CRS of the
-// map products (DESIGN §6).
+// Where the local ENU world frame (docs/design.md §3) lies on its body, and the projected CRS of
+// the map products (docs/design.md §6).
 //
 // Earth: the UTM zone of the origin (EPSG 326zz north, 327zz south; UPS 32661/32761 beyond
 // UTM's latitude limits), on WGS 84. Moon and Mars: a transverse Mercator centred on the origin

@@ -1,5 +1,5 @@
 #pragma once
-// The daemon's inbox (DESIGN §7): a sequence directory (§4) filled while the rover drives.
+// The daemon's inbox (docs/design.md §7): a sequence directory (§4) filled while the rover drives.
 // sequence.yaml first, then per frame frames/NNNNNN.left.png + .right.png (stereo) or
 // NNNNNN.ply (cloud), NNNNNN.odom (its one TUM odometry line) and optionally NNNNNN.gt (a
 // ground-truth line). Producers write under a dot-name and rename in, so a file present is

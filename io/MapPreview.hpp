@@ -1,5 +1,5 @@
 #pragma once
-// dem.png (DESIGN §6): hillshade blended with a colour map of elevation, a colour bar in
+// dem.png (docs/design.md §6): hillshade blended with a colour map of elevation, a colour bar in
 // metres, a scale bar, and the trajectory. Drawn in the map's grid frame, north up (the same
 // orientation as dem.tif).
 

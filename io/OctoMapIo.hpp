@@ -1,5 +1,5 @@
 #pragma once
-// map.bt / map.ot: the fused OcTree written atomically (DESIGN §6).
+// map.bt / map.ot: the fused OcTree written atomically (docs/design.md §6).
 
 #include <octomap/OcTree.h>
 

@@ -26,7 +26,7 @@ registration::PointCloud ParseXyz(std::string_view data, const std::filesystem::
 enum class NonFinite {
   kReject,  ///< an IoError naming the file and the line or vertex: a scan given to `register`
   /// Kept as read, for the caller to drop and count: a sensor's frame (an organised cloud holds
-  /// NaN where a pixel had no return), whose finite points are still good (DESIGN.md §9).
+  /// NaN where a pixel had no return), whose finite points are still good (docs/design.md §9).
   kKeep,
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// A recorded sequence directory (DESIGN.md §4), validated when opened and then read one frame
+// A recorded sequence directory (docs/design.md §4), validated when opened and then read one frame
 // at a time: the poses of every frame are held (a few hundred bytes each), the images and point
 // clouds never more than one frame's worth.
 
@@ -28,7 +28,7 @@ SequenceInfo ReadSequenceInfo(const std::filesystem::path& sequence_dir);
 std::string FrameStem(std::size_t index);
 
 /// "000042.left.png" -> 42 and "left.png"; the kinds are left.png, right.png, ply, and an
-/// inbox's odom and gt (DESIGN §7). False for other names (dot-names among them).
+/// inbox's odom and gt (docs/design.md §7). False for other names (dot-names among them).
 bool ParseFrameFileName(const std::string& name, std::size_t* index, std::string* kind);
 
 /// An 8-bit grey image that must have the camera's size. @throw IoError naming the file.

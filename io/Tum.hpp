@@ -1,5 +1,5 @@
 #pragma once
-// TUM trajectory files: `timestamp tx ty tz qx qy qz qw` (DESIGN.md §3, §4).
+// TUM trajectory files: `timestamp tx ty tz qx qy qz qw` (docs/design.md §3, §4).
 
 #include <Eigen/Geometry>
 #include <filesystem>

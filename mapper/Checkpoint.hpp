@@ -1,5 +1,5 @@
 #pragma once
-// The daemon's state to and from disk (DESIGN §7): after `kill -9` or a power loss at any
+// The daemon's state to and from disk (docs/design.md §7): after `kill -9` or a power loss at any
 // instant, a restart resumes with nothing lost and without registering a frame twice.
 //
 // Two files in one directory:

@@ -1,5 +1,5 @@
 #pragma once
-// `rovermap serve` (DESIGN §7): frames taken from an inbox as they arrive, in index order,
+// `rovermap serve` (docs/design.md §7): frames taken from an inbox as they arrive, in index order,
 // through the same Mapper as replay; the outputs of §6 published every few frames, status.json
 // after every frame, and every frame journalled (mapper/Checkpoint) before it counts as done,
 // so that a restart after `kill -9` resumes where the run stopped.

@@ -1,5 +1,5 @@
 #pragma once
-// The drift report of a run (DESIGN §6): drift.csv (one row per frame), summary.json and
+// The drift report of a run (docs/design.md §6): drift.csv (one row per frame), summary.json and
 // drift.png, from the mapper's per-frame results.
 
 #include <filesystem>
@@ -48,7 +48,7 @@ double ProcessingMs(const std::vector<FrameResult>& results);
 /// summary.json: frames, registered, partial, fallbacks (whole increment from dead reckoning,
 /// bad frames included), bad_frames, distance_m, final_correction, timing (per stage: total and
 /// per-frame median, ms), frames_per_second, peak_rss_mb, dem and octomap figures, and `metrics`
-/// {registered, odometry} (DESIGN §8 keys) when `drift` is given.
+/// {registered, odometry} (docs/design.md §8 keys) when `drift` is given.
 nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift);
 

@@ -9,7 +9,7 @@ namespace rovermap::mapper {
 namespace {
 
 // The stereo error model for points that come without covariances, when the sequence has a
-// camera (DESIGN §4: it "feeds the stereo error model of the points"). Sensor frame.
+// camera (docs/design.md §4: it "feeds the stereo error model of the points"). Sensor frame.
 void AddStereoCovariances(registration::PointCloud* cloud, const io::CameraModel& c,
                           const stereo::StereoOptions& options) {
   const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
@@ -27,7 +27,7 @@ void SensorToBody(registration::PointCloud* cloud, const Eigen::Isometry3d& T_bo
   for (auto& c : cloud->covariances) c = R * c * R.transpose();
 }
 
-// "frames/000003.ply: no usable points": a bad frame's reason names its file (DESIGN §5).
+// "frames/000003.ply: no usable points": a bad frame's reason names its file (docs/design.md §5).
 std::string AboutFile(const io::Frame& frame, const std::string& reason) {
   return frame.file.empty() ? reason : frame.file.string() + ": " + reason;
 }

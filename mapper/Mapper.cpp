@@ -113,7 +113,8 @@ PreparedFrame Mapper::Prepare(LoadedFrame loaded) const {
   PreparedFrame p;
   p.loaded = std::move(loaded);
   if (!p.loaded.ok) return p;
-  // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones (§9a).
+  // 1. Load (done by LoadFrame): index the body-frame points; flag the isolated ones
+  // (docs/design.md §9a).
   const auto start = Clock::now();
   p.source = std::make_unique<registration::IndexedCloud>(std::move(p.loaded.cloud),
                                                           options_.registration);

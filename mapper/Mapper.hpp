@@ -1,5 +1,5 @@
 #pragma once
-// The pipeline, one frame at a time (DESIGN §1): load, predict, register, judge, blend the
+// The pipeline, one frame at a time (docs/design.md §1): load, predict, register, judge, blend the
 // degenerate directions, chain, fuse, report. `rovermap replay` and `rovermap serve` both
 // drive this class.
 

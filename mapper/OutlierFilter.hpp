@@ -1,6 +1,6 @@
 #pragma once
-// Isolated points of a frame (stereo mismatches, off the surface along their ray; DESIGN §9a),
-// found with the frame's own k-d tree so that nothing is indexed twice.
+// Isolated points of a frame (stereo mismatches, off the surface along their ray;
+// docs/design.md §9a), found with the frame's own k-d tree so that nothing is indexed twice.
 
 #include <Eigen/Core>
 #include <cstddef>

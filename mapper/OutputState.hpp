@@ -1,5 +1,5 @@
 #pragma once
-// What the outputs of DESIGN §6 are made of, copied out of a Mapper: the results, the DEM's
+// What the outputs of docs/design.md §6 are made of, copied out of a Mapper: the results, the DEM's
 // published layers, the OctoMap's serialised bytes and the few figures summary.json reports.
 // Taking it costs a copy of the results and a pass over the DEM's tiles; the OcTree is
 // serialised on the OctoMap's own thread. Writing it (encoding the GeoTIFF and the PNGs, most

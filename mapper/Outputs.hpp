@@ -1,5 +1,5 @@
 #pragma once
-// The replay / serve output set (DESIGN §6), each file written atomically.
+// The replay / serve output set (docs/design.md §6), each file written atomically.
 
 #include <filesystem>
 #include <functional>

@@ -1,6 +1,6 @@
 #pragma once
 // Chaining of frame-to-frame increments into world poses, and the per-frame correction of
-// dead reckoning that drift.csv reports (DESIGN §6).
+// dead reckoning that drift.csv reports (docs/design.md §6).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -11,7 +11,7 @@
 namespace rovermap::mapper {
 
 /// Rotation from roll, pitch, yaw [rad]: R = Rz(yaw)·Ry(pitch)·Rx(roll), the convention of
-/// sequence.yaml (DESIGN §4). Never fails; non-finite angles give a non-finite matrix.
+/// sequence.yaml (docs/design.md §4). Never fails; non-finite angles give a non-finite matrix.
 Eigen::Matrix3d RotationFromEulerRpy(const Eigen::Vector3d& rpy_rad);
 
 /// Roll, pitch, yaw [rad] with R = Rz(yaw)·Ry(pitch)·Rx(roll); roll and yaw in [−π, π], pitch

@@ -15,8 +15,8 @@ struct ServeOptions {
   /// [frames] a ready frame numbered more than this beyond the next one expected is rejected as
   /// misnumbered, instead of every index between being declared missing.
   int max_gap_frames = 10000;
-  /// [frames] publish the outputs (DESIGN §6) after this many frames, when the queue runs dry
-  /// with frames done since the last publication, and on exit.
+  /// [frames] publish the outputs (docs/design.md §6) after this many frames, when the queue
+  /// runs dry with frames done since the last publication, and on exit.
   int publish_every = 10;
   /// [frames] snapshot the state after this many frames (each frame is journalled anyway, so a
   /// restart never registers a frame twice; a larger value writes less, and a restart re-fuses

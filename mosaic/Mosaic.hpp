@@ -1,7 +1,8 @@
 #pragma once
-// `rovermap mosaic`: many dem.tif files (DESIGN §6) fused into one north-up COG on a common grid.
-// Each input is resampled onto the output grid with GDAL's warper, tile by tile, optionally
-// after co-registration onto the mosaic of the inputs before it, and fused by inverse variance.
+// `rovermap mosaic`: many dem.tif files (docs/design.md §6) fused into one north-up COG on a
+// common grid. Each input is resampled onto the output grid with GDAL's warper, tile by tile,
+// optionally after co-registration onto the mosaic of the inputs before it, and fused by inverse
+// variance.
 
 #include <Eigen/Core>
 #include <array>

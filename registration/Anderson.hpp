@@ -7,8 +7,8 @@ namespace rovermap::registration {
 
 /// Anderson acceleration (type II, Walker & Ni 2011) of a fixed-point iteration x ← G(x) in
 /// R⁶, as in AA-ICP (Pavlov et al. 2018): ICP's update is such an iteration on the pose, and
-/// it converges only linearly where a surface lets the clouds slide (ALGORITHM.md, "Known
-/// weakness"). The caller keeps the safeguard: an extrapolated pose is accepted only if it
+/// it converges only linearly where a surface lets the clouds slide (docs/design.md §1,
+/// "Known weakness"). The caller keeps the safeguard: an extrapolated pose is accepted only if it
 /// does not raise the registration energy.
 class AndersonAccelerator {
  public:

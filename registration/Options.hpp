@@ -15,10 +15,10 @@ enum class Solver { kSvd, kDualQuaternion };
 /// (a curve has no normal to project on); see EffectiveResidual.
 enum class Residual { kAuto, kPointToPoint, kPointToPlane };
 /// Stopping test. kRelative is the paper's 1 % test on r and t; kAbsolute stops when
-/// the step is below fixed tolerances in metres and degrees (see ALGORITHM.md,
-/// "Known weakness").
+/// the step is below fixed tolerances in metres and degrees (docs/design.md §1, "Known
+/// weakness").
 enum class Convergence { kRelative, kAbsolute };
-/// Acceleration of the iterates (ALGORITHM.md, "Known weakness"): Anderson extrapolation of
+/// Acceleration of the iterates (docs/design.md §1, "Known weakness"): Anderson extrapolation of
 /// the pose with an energy safeguard (AA-ICP, Pavlov et al. 2018), or none (the paper).
 /// kAuto: Anderson for point-to-point, which creeps; none for point-to-plane, whose
 /// Gauss-Newton steps it only disturbed (measured: more iterations, half the extrapolations
@@ -66,13 +66,13 @@ struct RegistrationOptions {
   /// fitted to (CloudGeometry: NormalSpread, EstimateTangents) [count of σ]; 0 = the plain
   /// test (the paper). Noisy tangents otherwise reject good pairs at random.
   double orientation_spread_sigmas = 1.5;
-  /// The staged orientation test (issue 12): when the source's orientations must be estimated
-  /// (PCA normals: no normals given), the first `coarse_iterations` run on the coarse subset
-  /// (every `coarse_step`-th sampled point) as with coarse_to_fine, and the test is kept for
-  /// the fine stage only if it rejected at least `orientation_min_rejected` of the pairs found
-  /// in the last coarse iteration. Clean scans then need source normals for the coarse subset
-  /// only. Sources with given normals (stereo) are left as they were. With coarse_to_fine the
-  /// test is staged the same way whatever the normals.
+  /// The staged orientation test: when the source's orientations must be estimated (PCA normals: no
+  /// normals given), the first `coarse_iterations` run on the coarse subset (every `coarse_step`-th
+  /// sampled point) as with coarse_to_fine, and the test is kept for the fine stage only if it
+  /// rejected at least `orientation_min_rejected` of the pairs found in the last coarse iteration.
+  /// Clean scans then need source normals for the coarse subset only. Sources with given normals
+  /// (stereo) are left as they were. With coarse_to_fine the test is staged the same way whatever
+  /// the normals.
   bool staged_orientation_test = true;
   /// [ratio]; 0 = the staged test is always kept.
   double orientation_min_rejected = 0.006;

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Build datasets/kitti_stereo51 (a DESIGN.md section 4 stereo sequence) from the KITTI excerpt.
+"""Build datasets/kitti_stereo51 (a docs/design.md section 4 stereo sequence) from the KITTI
+excerpt.
 
 Usage:
     python3 scripts/make_kitti_sequence.py SOURCE_DIR OUT_DIR
@@ -137,7 +138,7 @@ def rot_z(c, s):
 
 
 def rpy_deg_to_matrix(roll, pitch, yaw):
-    """R = Rz(yaw) . Ry(pitch) . Rx(roll) (DESIGN.md section 4), angles in degrees."""
+    """R = Rz(yaw) . Ry(pitch) . Rx(roll) (docs/design.md section 4), angles in degrees."""
     return mat_mul(rot_z(*cos_sin_deg(yaw)), mat_mul(rot_y(*cos_sin_deg(pitch)),
                                                     rot_x(*cos_sin_deg(roll))))
 
@@ -328,7 +329,8 @@ def main(argv):
     qb = matrix_to_quaternion(body_cam[0])
     yaml = (
         "# KITTI odometry excerpt (51 frames), written by scripts/make_kitti_sequence.py:\n"
-        "# DESIGN.md section 4. Camera from calib.txt; body x forward, y left, z up, origin on\n"
+        "# docs/design.md section 4. Camera from calib.txt; body x forward, y left, z up, "
+        "origin on\n"
         "# the road below the left camera; origin approximate (Karlsruhe, no GPS in the excerpt).\n"
         "sensor:\n"
         "  type: stereo\n"

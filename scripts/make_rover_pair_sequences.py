@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Build datasets/rover_erfoud_minnie and datasets/rover_devon_island (DESIGN.md section 4
+"""Build datasets/rover_erfoud_minnie and datasets/rover_devon_island (docs/design.md section 4
 two-frame stereo sequences) from the team's shared copies of two real rover stereo pairs.
 
 Usage:
@@ -229,7 +229,8 @@ def MakeErfoud(shared, out_root):
     q_cam = [v / norm for v in cam[3:]]
     WriteText(os.path.join(out, "sequence.yaml"),
               "# Two real rover stereo frames (InFuse, LAAS-CNRS Minnie), written by\n"
-              "# scripts/make_rover_pair_sequences.py: DESIGN.md section 4. Camera: the rectified\n"
+              "# scripts/make_rover_pair_sequences.py: docs/design.md section 4. "
+              "Camera: the rectified\n"
               "# 640x400 pair; T_body_sensor: NavCamL in RoverBodyFrame (poses_derived.txt).\n"
               "# Origin approximate (the source names no site); frame rate nominal.\n"
               "sensor:\n  type: stereo\n  T_body_sensor:\n"
@@ -282,7 +283,8 @@ def MakeDevon(shared, out_root):
             WriteGreyPng(os.path.join(frames, "%06d.%s.png" % (k, side)), w2, h2, grey)
     WriteText(os.path.join(out, "sequence.yaml"),
               "# Two real rover stereo frames (UTIAS/ASRL Devon Island dataset via InFuse), written\n"
-              "# by scripts/make_rover_pair_sequences.py: DESIGN.md section 4. Camera: the rectified\n"
+              "# by scripts/make_rover_pair_sequences.py: docs/design.md section 4. "
+              "Camera: the rectified\n"
               "# 1280x960 pair halved to 640x480. T_body_sensor from a ground-plane fit (README);\n"
               "# origin approximate (no GPS fix for this pair); frame rate nominal.\n"
               "sensor:\n  type: stereo\n  T_body_sensor:\n"

@@ -287,9 +287,9 @@ SimulateResult Simulator::WriteSequence(
   info.T_body_sensor = T_body_sensor_;
   info.origin = {o.origin_latitude_deg, o.origin_longitude_deg, o.origin_altitude_m};
   info.frame_rate_hz = o.frame_rate_hz;
-  io::WriteSequenceYaml(
-      dir, info,
-      "Written by rovermap simulate (seed " + std::to_string(o.seed) + "): DESIGN.md section 4.");
+  io::WriteSequenceYaml(dir, info,
+                        "Written by rovermap simulate (seed " + std::to_string(o.seed) +
+                            "): docs/design.md section 4.");
 
   SimulateResult result;
   const auto start = std::chrono::steady_clock::now();

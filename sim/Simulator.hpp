@@ -1,7 +1,7 @@
 #pragma once
 // The sequence simulator: a rover driving over a synthetic terrain (sim/Terrain), its mast
 // stereo camera rendered by ray casting (or points with the stereo error model), and dead
-// reckoning with configurable errors. Writes a sequence directory (DESIGN.md §4).
+// reckoning with configurable errors. Writes a sequence directory (docs/design.md §4).
 
 #include <Eigen/Geometry>
 #include <cstddef>

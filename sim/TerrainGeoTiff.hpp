@@ -1,5 +1,5 @@
 #pragma once
-// terrain.tif: the simulator's true terrain written like dem.tif (DESIGN.md §6), so that DEM
+// terrain.tif: the simulator's true terrain written like dem.tif (docs/design.md §6), so that DEM
 // accuracy can be measured with `rovermap eval --dem dem.tif --reference terrain.tif`.
 
 #include <filesystem>

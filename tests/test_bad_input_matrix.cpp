@@ -1,7 +1,7 @@
 // The bad-input matrix (README, "Bad input"): one test per row, each running the real
 // `rovermap` command on a copy of bundled data broken one way, and checking the exit status
-// (DESIGN §5), that stderr names the file (and line or key) at fault, and what is left in the
-// output: nothing, no temporary, or, for a bad frame, the full set with the frame flagged.
+// (docs/design.md §5), that stderr names the file (and line or key) at fault, and what is left in
+// the output: nothing, no temporary, or, for a bad frame, the full set with the frame flagged.
 // Rows are named Command_BadInput and kept in the README table's order.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -533,7 +533,7 @@ TEST_F(BadInput, Replay_NonFiniteCalibration) {
 }
 
 // Every point of frame 2 NaN (the PLY's properties are all doubles): each is dropped and
-// counted (DESIGN §9), which leaves no point, so the frame is a bad frame.
+// counted (docs/design.md §9), which leaves no point, so the frame is a bad frame.
 TEST_F(BadInput, Replay_NonFinitePoints) {
   const fs::path seq = Copy(kTinyCloud, "seq");
   const fs::path ply = seq / "frames" / "000002.ply";

@@ -1,8 +1,8 @@
-// Honest uncertainty (issue 31, item 3): the chained covariance must say how far the chained
-// pose is from the truth. Two parts. The maths: errors that repeat from step to step
-// (PoseChain's SystematicError) add up linearly, and the chain's covariance must follow them as
-// a Monte Carlo of perturbed SE(3) chains does. The data: on KITTI and the simulator, the true
-// pose lies within the stated 2σ (6-D NEES <= 12.85) about as often as it should.
+// Honest uncertainty: the chained covariance must say how far the chained pose is from the truth.
+// Two parts. The maths: errors that repeat from step to step (PoseChain's SystematicError) add up
+// linearly, and the chain's covariance must follow them as a Monte Carlo of perturbed SE(3) chains
+// does. The data: on KITTI and the simulator, the true pose lies within the stated 2σ (6-D NEES <=
+// 12.85) about as often as it should.
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>

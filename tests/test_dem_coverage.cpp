@@ -1,10 +1,10 @@
-// The DEM's coverage on real stereo (issue 31): of the cells near the rover that the stereo
-// points reach, how many does the map publish, and are the empty ones spread or in bands?
-// Far ground is sampled more coarsely than the cells along the view, and SGBM's sub-pixel
-// disparity clusters near whole pixels (pixel locking), so one frame's points cover the cells
-// in stripes of constant range; a cell is published only with points of two frames
-// (dem.min_frame_span), so the cells between the stripes stayed empty: regular bands across
-// the range direction. stereo.fill_spacing_m closes them (README "Correlation stereo").
+// The DEM's coverage on real stereo: of the cells near the rover that the stereo points reach, how
+// many does the map publish, and are the empty ones spread or in bands? Far ground is sampled more
+// coarsely than the cells along the view, and SGBM's sub-pixel disparity clusters near whole pixels
+// (pixel locking), so one frame's points cover the cells in stripes of constant range; a cell is
+// published only with points of two frames (dem.min_frame_span), so the cells between the stripes
+// stayed empty: regular bands across the range direction. stereo.fill_spacing_m closes them (README
+// "Correlation stereo").
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -190,7 +190,7 @@ TEST(DemCoverage, KittiRoadHasNoBands) {
   const Coverage road = Measure(run, {4.0, 2, 3.0});
   Print("kitti road", road, INFINITY);
   // Measured: 0.980, emptiest stripe 0.065, against 0.960 and 0.176 without the fill; with the
-  // seed gate's trajectory (issue 31) 0.980 and 0.127 against 0.960 and 0.182.
+  // seed gate's trajectory (mapper.seed_gate_scale) 0.980 and 0.127 against 0.960 and 0.182.
   EXPECT_GE(road.Fraction(), 0.9);
   EXPECT_LT(road.WorstBinHoles(kMinBinCells), 0.15);
 }

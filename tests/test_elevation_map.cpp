@@ -398,10 +398,10 @@ TEST(ElevationMap, CellsBelowMinSupportAreNaNInHeightAtAndTheGeoTiff) {
   }
 }
 
-// DESIGN §9a on simulated frames: the simulator's cloud sensor (its stereo error model, default
-// camera and terrain, one point per 4 × 4 pixels) with 2 % of the points moved to a random depth
-// on their ray, fused at the TRUE poses; each published cell is compared with the true terrain
-// height at its centre.
+// docs/design.md §9a on simulated frames: the simulator's cloud sensor (its stereo error model,
+// default camera and terrain, one point per 4 × 4 pixels) with 2 % of the points moved to a
+// random depth on their ray, fused at the TRUE poses; each published cell is compared with the
+// true terrain height at its centre.
 struct SimulatedFrames {
   std::vector<std::vector<Eigen::Vector3d>> points;       // world
   std::vector<std::vector<Eigen::Matrix3d>> covariances;  // sensor frame

@@ -1,5 +1,5 @@
-// `rovermap eval` end to end: the JSON of DESIGN.md §8 for trajectories (KITTI and TUM) and DEMs,
-// --plot PNGs, config keys, and the exit statuses and messages on bad input.
+// `rovermap eval` end to end: the JSON of docs/design.md §8 for trajectories (KITTI and TUM) and
+// DEMs, --plot PNGs, config keys, and the exit statuses and messages on bad input.
 #include <cpl_conv.h>
 #include <gdal_priv.h>
 #include <gtest/gtest.h>

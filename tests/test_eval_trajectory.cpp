@@ -1,4 +1,4 @@
-// Trajectory metrics (DESIGN.md §8) against hand-computed values: pure translation drift, pure
+// Trajectory metrics (docs/design.md §8) against hand-computed values: pure translation drift, pure
 // yaw drift, a known SE(3) offset; association; TUM/KITTI parsing; KITTI 00's ground truth.
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-// Degeneracy judged against the noise (issue 31, item 2): on featureless ground with real
-// noise the in-plane directions get information from the errors of the fitted normals and from
-// the sensor's own artefacts (range bins, disparity pixel locking: fixed to the sensor, not to
-// the ground), never from the ground. mapper.min_information_over_noise compares each
-// direction with that floor (RegistrationResult::noise_information), so x, y and yaw keep dead
-// reckoning there, and the trajectory is no worse than dead reckoning's.
+// Degeneracy judged against the noise: on featureless ground with real noise the in-plane
+// directions get information from the errors of the fitted normals and from the sensor's own
+// artefacts (range bins, disparity pixel locking: fixed to the sensor, not to the ground), never
+// from the ground. mapper.min_information_over_noise compares each direction with that floor
+// (RegistrationResult::noise_information), so x, y and yaw keep dead reckoning there, and the
+// trajectory is no worse than dead reckoning's.
 //
 // The clouds carry no normals (sim.cloud_normals false), as a real sensor's: with the
 // simulator's exact normals a plane has no in-plane information at all and the relative test
@@ -211,11 +211,11 @@ TEST(FeaturelessGround, TiltedPlaneWithPixelLocking) {
   ExpectDeadReckoningInPlane(ReplayOf(o, "plane_pixel_locking"), 1.0);
 }
 
-// Why the issue's 0.9× cannot be met here: this simulator's dead reckoning has the true roll,
-// pitch and step height, so on a plane its whole error lies in x, y and yaw, which the plane
-// cannot observe. With the terrain's true normals in the frames (no normal noise, no bias)
-// registration ends exactly where dead reckoning does (measured 1.00×); the ratios below 1
-// above come from x errors that cancel by chance.
+// Why the tests above do not ask registration to beat dead reckoning (a ratio of 0.9×): this
+// simulator's dead reckoning has the true roll, pitch and step height, so on a plane its whole
+// error lies in x, y and yaw, which the plane cannot observe. With the terrain's true normals in
+// the frames (no normal noise, no bias) registration ends exactly where dead reckoning does
+// (measured 1.00×); the ratios below 1 above come from x errors that cancel by chance.
 TEST(FeaturelessGround, TrueNormalsEndWhereDeadReckoningEnds) {
   sim::SimOptions o = Featureless();
   o.cloud_normals = true;

@@ -4,10 +4,9 @@
 // Tolerances: the terrain patches are 8 m × 6 m sampled every 6 cm with σ = 5 mm noise and
 // 15 % outliers. Point-to-plane lands within 0.1° and 1 cm — 0.1° is 1.4 cm at the far
 // edge of the patch, 1 cm is a sixth of the sample spacing; the measured errors are 3–4×
-// smaller (see the closing note of issue 2). The paper's point-to-point residual cannot
-// see motion along a smooth surface below the sample spacing, so on terrain it is only
-// asked to reduce the initial error; on curves (1 cm samples, 3 mm noise) it must land
-// within 0.2° and 2 mm (measured 0.05° and 0.8 mm).
+// smaller. The paper's point-to-point residual cannot see motion along a smooth surface below
+// the sample spacing, so on terrain it is only asked to reduce the initial error; on curves
+// (1 cm samples, 3 mm noise) it must land within 0.2° and 2 mm (measured 0.05° and 0.8 mm).
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -165,7 +164,7 @@ TEST(Icp, PointToPointReducesTerrainErrorAndDmaxNeverIncreases) {
     EXPECT_LE(r.trace[k].dmax_m, r.trace[k - 1].dmax_m) << "iteration " << k + 1;
 }
 
-// ALGORITHM.md, "Known weakness": the paper's 1 % relative test stops point-to-point
+// docs/design.md §1, "Known weakness": the paper's 1 % relative test stops point-to-point
 // after a handful of iterations far from the optimum; the default absolute test goes on.
 TEST(Icp, RelativeStoppingTestStopsEarly) {
   const ScenePair p = MakeTerrainPair(Terrain(5));
@@ -312,7 +311,7 @@ TEST(Icp, UncertaintyWeightingHelpsWithRangeNoise) {
   EXPECT_LT(error_weighted, 0.75 * error_plain);
 }
 
-// Anderson acceleration (ALGORITHM.md, "Known weakness"): point-to-point creeps along the
+// Anderson acceleration (docs/design.md §1, "Known weakness"): point-to-point creeps along the
 // smooth terrain; extrapolating the pose reaches the same fixed point in far fewer iterations
 // (measured: 43–60 against 116–188), and the energy safeguard rejects the bad extrapolations.
 TEST(Icp, AndersonReachesTheFixedPointInFewerIterations) {

@@ -73,7 +73,8 @@ TEST_F(Bunny, Bun045ToBun000From10DegreesAnd5mmOff) {
 }
 
 // The paper's own formulation (point-to-point, SVD, no orientation test) gets there too,
-// only more slowly (ALGORITHM.md, "Known weakness": measured 125–480 iterations).
+// only more slowly (docs/design.md §1, "Known weakness": measured 125–480
+// iterations).
 TEST_F(Bunny, PaperPointToPointAlsoConverges) {
   const Eigen::Isometry3d truth = GroundTruth("bun045.ply", "bun000.ply");
   RegistrationOptions options;

@@ -1,7 +1,7 @@
-// The Mahalanobis gate and a biased seed (issue 31). Stereo points are precise across the ray
-// and poor along it, so a gate on the sensor's covariance alone rejects the far points a
-// heading error displaced sideways: exactly those that would turn it back. The seed's own
-// uncertainty in the gate (registration.seed_*_sigma), closed as the steps shrink, keeps them.
+// The Mahalanobis gate and a biased seed. Stereo points are precise across the ray and poor along
+// it, so a gate on the sensor's covariance alone rejects the far points a heading error displaced
+// sideways: exactly those that would turn it back. The seed's own uncertainty in the gate
+// (registration.seed_*_sigma), closed as the steps shrink, keeps them.
 //
 // The scene is a street canyon as KITTI sees it: a road and two walls 4 m to either side, out
 // to 30 m, from 12 m on; the near road fixes roll, pitch and height, only the walls hold the

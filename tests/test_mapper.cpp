@@ -139,8 +139,8 @@ TEST(Mapper, SimulatedCloudTraverse) {
   EXPECT_LT(t.dem.rmse_m, 0.035);
   EXPECT_LT(t.dem.p95_m, 0.075);
   EXPECT_EQ(t.dem.off_20cm, 0u);
-  // With the chained covariance honest (issue 31): 0.956 within 2σ, RMSE 1.49 cm. Calibrated
-  // means between 0.9 and 0.99, not merely high.
+  // With the chained covariance as step 6 of the recipe makes it (docs/design.md §1): 0.956
+  // within 2σ, RMSE 1.49 cm. Calibrated means between 0.9 and 0.99, not merely high.
   EXPECT_GT(t.dem.within_2sigma, 0.9);
   EXPECT_LT(t.dem.within_2sigma, 0.99);
 }
@@ -153,10 +153,11 @@ TEST(Mapper, SimulatedStereoTraverse) {
   // within 2σ, no cell off by 0.2 m. Before cells needed two frames (dem.min_frame_span): 8810
   // cells, RMSE 8.2 cm, 26 off by 0.2 to 1.8 m: the sky above the skyline, which SGBM fills
   // from the terrain's edge, one frame at a time.
-  // With the seed gate (issue 31, step 3 of the recipe) and the DEM fill between stereo pixels:
-  // 0.0064 m, DEM 8486 cells, RMSE 1.44 cm, p95 3.34 cm, 0.867 within 2σ. The trajectory is
-  // better, its attitude not: the gate lets the registration's own roll and pitch noise through
-  // where the narrow gate had held the simulator's exact ones (README, "Known limits").
+  // With the seed gate (step 3 of the recipe, docs/design.md §1) and the DEM fill between
+  // stereo pixels: 0.0064 m, DEM 8486 cells, RMSE 1.44 cm, p95 3.34 cm, 0.867 within 2σ. The
+  // trajectory is better, its attitude not: the gate lets the registration's own roll and pitch
+  // noise through where the narrow gate had held the simulator's exact ones (README, "Known
+  // limits").
   EXPECT_LT(t.drift_ratio, 0.55);
   EXPECT_GT(t.dem.cells, 8000u);
   EXPECT_LT(t.dem.rmse_m, 0.02);

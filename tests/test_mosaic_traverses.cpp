@@ -51,8 +51,8 @@ const std::string kCommon =
     "--set sim.sensor=cloud --set sim.frames=24 --set sim.terrain_size_m=20 --set sim.rocks=100 "
     "--set sim.craters=4";
 
-// Issue 31: a traverse driven back the other way beside the first two, about 15 % of its cells
-// over theirs (at the far end of its view, where its cells are sparse).
+// A traverse driven back the other way beside the first two, about 15 % of its cells over theirs
+// (at the far end of its view, where its cells are sparse).
 const Traverse kReturn = {
     "r",
     "--set sim.start_x_m=7 --set sim.start_y_m=-2.6 --set sim.start_yaw_deg=180 "
@@ -175,9 +175,9 @@ TEST_F(MosaicTraverses, CoregistrationBringsThreeTraversesOntoTheTrueTerrain) {
   EXPECT_GT(c_off.rmse_m, 0.011);
   EXPECT_LT(c_off.rmse_m, 0.020);
   EXPECT_LT(c_on.rmse_m, 0.8 * c_off.rmse_m);
-  // With the chained covariance made honest (issue 31: the stereo scale and the systematic
-  // part), each DEM's σ carries its traverse's pose uncertainty, and fewer of C's cells stand 3σ
-  // off the others: band 4 sums to 0 and 7 (136 before; RMSE 0.87 and 1.17 cm).
+  // With the chained covariance made honest (the stereo scale and the systematic part), each DEM's
+  // σ carries its traverse's pose uncertainty, and fewer of C's cells stand 3σ off the others: band
+  // 4 sums to 0 and 7 (136 before; RMSE 0.87 and 1.17 cm).
   EXPECT_LT(d_on, 2.0);
   EXPECT_GT(d_off, 4.0);
   EXPECT_LT(on["inputs"][2]["disagreement_after"].get<double>(),
@@ -228,7 +228,7 @@ TEST_F(MosaicTraverses, AReturnTraverseOnASmallOverlapIsCorrectedWithoutATilt) {
   EXPECT_GT(overlap, 0.10);
   EXPECT_LT(overlap, 0.20);
   // The start error undone in heading, and no tilt made up (it had none). Measured: -2.05 deg
-  // of yaw, 0.02 deg of roll and pitch (before issue 31: 0.11 and -0.19 deg of tilt).
+  // of yaw, 0.02 deg of roll and pitch (main before commit 6afc90c: 0.11 and -0.19 deg of tilt).
   const double yaw = r["rotation_deg"][2].get<double>();
   EXPECT_LT(yaw, -1.0);
   EXPECT_GT(yaw, -4.0);
@@ -243,12 +243,12 @@ TEST_F(MosaicTraverses, AReturnTraverseOnASmallOverlapIsCorrectedWithoutATilt) {
   RecordProperty("rmse_off_m", std::to_string(c_off.rmse_m));
   RecordProperty("within_2sigma_on", std::to_string(c_on.within_2sigma));
   // Measured: 0.75 cm co-registered (92 % of cells within 2σ), 2.54 cm without; the traverses
-  // alone 0.86, 0.83 and 4.16 cm. (Before issue 31: 0.96 cm, 88 %.)
+  // alone 0.86, 0.83 and 4.16 cm. (Main before commit 6afc90c: 0.96 cm, 88 %.)
   EXPECT_LT(c_on.rmse_m, 1.3 * best_single);
   EXPECT_LT(c_on.rmse_m, best_single);
   EXPECT_LE(c_on.rmse_m, c_off.rmse_m);
-  // 0.88 with the seed gate in the traverses' replays (issue 31): the DEMs' σ is still
-  // optimistic (README, "Known limits").
+  // 0.88 with the seed gate (mapper.seed_gate_scale) in the traverses' replays: the DEMs' σ is
+  // still optimistic (README, "Known limits").
   EXPECT_GT(c_on.within_2sigma, 0.85);
 }
 

@@ -78,7 +78,7 @@ TEST(EulerRpy, MatchesTheDesignConvention) {
   EXPECT_TRUE((RotationFromEulerRpy({0, 0, 90 * kDeg}) * Eigen::Vector3d::UnitX())
                   .isApprox(Eigen::Vector3d::UnitY(), 1e-12));
   EXPECT_TRUE((RotationFromEulerRpy({0, 30 * kDeg, 0}) * Eigen::Vector3d::UnitX()).z() < 0.0);
-  // DESIGN §4: a level, forward-looking OpenCV camera is rpy [-90, 0, -90].
+  // docs/design.md §4: a level, forward-looking OpenCV camera is rpy [-90, 0, -90].
   const Eigen::Matrix3d R_body_camera = RotationFromEulerRpy({-90 * kDeg, 0, -90 * kDeg});
   EXPECT_TRUE((R_body_camera * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
   EXPECT_TRUE(

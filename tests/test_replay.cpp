@@ -1,5 +1,5 @@
-// `rovermap replay` end to end: the DESIGN §6 output set on the bundled tiny sequences, drift
-// against ground truth on simulated traverses (cloud and stereo), the DEM against the
+// `rovermap replay` end to end: the docs/design.md §6 output set on the bundled tiny sequences,
+// drift against ground truth on simulated traverses (cloud and stereo), the DEM against the
 // simulator's true terrain, determinism, the per-direction fallback on flat ground, corrupted
 // frames skipped, and bad sequences refused before any output.
 #include <gtest/gtest.h>
@@ -157,8 +157,8 @@ TEST_F(Replay, TinyCloudSequenceWritesTheWholeOutputSet) {
   EXPECT_TRUE(rows[1].at("matcher_status") == "converged" ||
               rows[1].at("matcher_status") == "max_iterations")
       << rows[1].at("matcher_status");
-  // The chained pose's σ (issue 31): zero at the start, growing along the chain, and checked
-  // against the ground truth in summary.json.
+  // The chained pose's σ (drift.csv's sigma_* columns): zero at the start, growing along the
+  // chain, and checked against the ground truth in summary.json.
   for (const char* column : {"sigma_x_m", "sigma_y_m", "sigma_z_m", "sigma_roll_deg",
                              "sigma_pitch_deg", "sigma_yaw_deg"}) {
     EXPECT_EQ(std::stod(rows[0].at(column)), 0.0) << column;

@@ -1,4 +1,4 @@
-// What a biased dead reckoning leaves in the registered trajectory (issue 31, DESIGN §10). A
+// What a biased dead reckoning leaves in the registered trajectory (docs/design.md §10). A
 // wheeled or skid-steer rover's heading drifts by tenths of a degree per metre; seeds made from
 // the ground truth with such a drift (sim::DeadReckoningFromTruth) must register to the same
 // increments as the ground truth itself: per-frame heading error within 0.02° of the
@@ -109,10 +109,11 @@ TEST(DeadReckoningFromTruth, ChainsTheModelledErrors) {
 }
 
 // The simulator's cloud traverse (30 frames, 0.15 m a frame) over ground with relief enough for
-// every direction to be registered: every heading bias and scale error of the issue. (Over the
-// default, gentler relief the relative degeneracy test, mapper.min_information, hands yaw to
-// dead reckoning on 16 of 29 frames, and the seed's error comes back through that door: the
-// biased seeds' ATE 1.2-1.7x the truth-seeded one's. That is the degeneracy test's to fix.)
+// every direction to be registered, from every heading bias (0.2, 0.4, 0.8°/m) and scale error (3
+// and 10 %) below. (Over the default, gentler relief the relative degeneracy test,
+// mapper.min_information, hands yaw to dead reckoning on 16 of 29 frames, and the seed's error
+// comes back through that door: the biased seeds' ATE 1.2-1.7x the truth-seeded one's. That is the
+// degeneracy test's to fix.)
 TEST(SeedRobustness, SimulatedTraverse) {
   const std::filesystem::path dir = rovermap::testing::ScratchDir() / "sim";
   config::Config cfg;

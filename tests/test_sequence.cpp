@@ -1,4 +1,4 @@
-// Sequence directories (DESIGN.md §4): reading, streaming, and every validation error.
+// Sequence directories (docs/design.md §4): reading, streaming, and every validation error.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// `rovermap serve` end to end (DESIGN §7): frames dropped into an inbox give the outputs of
+// `rovermap serve` end to end (docs/design.md §7): frames dropped into an inbox give the outputs of
 // `replay`; kill -9 at every kind of point (mid-frame, mid-journal, mid-checkpoint,
 // mid-publish) and a restart give them too, with no frame registered twice; SIGTERM exits 0
 // with outputs; bad frames go to rejected/; a gap times out; a second daemon is refused.

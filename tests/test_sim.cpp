@@ -94,7 +94,7 @@ TEST(Simulator, WritesAValidSequenceInBothModes) {
         });
     EXPECT_EQ(r.frames, 3u);
     EXPECT_EQ(calls, 3u);
-    io::SequenceReader reader(dir);  // validates everything (DESIGN §4)
+    io::SequenceReader reader(dir);  // validates everything (docs/design.md §4)
     EXPECT_EQ(reader.frame_count(), 3u);
     EXPECT_TRUE(reader.has_groundtruth());
     io::Frame frame;

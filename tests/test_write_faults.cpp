@@ -1,7 +1,7 @@
 // Faults while writing (README "Robustness"): a full disk or a file-size limit during any output
-// is reported naming the file (exit status 1, DESIGN §5), the previous version of that file stays
-// byte for byte, and no temporary is left. The fault is RLIMIT_FSIZE in a child process: past
-// the limit write() fails with EFBIG, as on a full disk, and no root is needed.
+// is reported naming the file (exit status 1, docs/design.md §5), the previous version of that
+// file stays byte for byte, and no temporary is left. The fault is RLIMIT_FSIZE in a child
+// process: past the limit write() fails with EFBIG, as on a full disk, and no root is needed.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>

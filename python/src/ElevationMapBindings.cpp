@@ -130,8 +130,8 @@ dem::ElevationMap& ElevationMapHandle::Mutable() {
 void BindElevationMap(py::module_& m) {
   py::class_<ElevationMapHandle>(
       m, "ElevationMap",
-      "The DEM grid with its two-hypothesis Kalman fusion per cell (DESIGN 3, 9a); the same as "
-      "the mapper's")
+      "The DEM grid with its two-hypothesis Kalman fusion per cell (docs/design.md sections 3 "
+      "and 9a); the same as the mapper's")
       .def(py::init([](py::handle origin, const std::string& body, py::handle config,
                        const py::kwargs& overrides) {
              const config::Config cfg = ConfigFrom(config, overrides, "dem");

@@ -1,4 +1,5 @@
-// rovermap.eval: the trajectory and DEM metrics of `rovermap eval` (DESIGN 8) on arrays or files.
+// rovermap.eval: the trajectory and DEM metrics of `rovermap eval` (docs/design.md §8) on arrays
+// or files.
 #include <pybind11/stl.h>
 
 #include "eval/DemComparison.hpp"
@@ -107,7 +108,8 @@ void BindEval(py::module_& parent) {
       py::arg("estimate_timestamps") = py::none(), py::arg("groundtruth_timestamps") = py::none(),
       py::arg("config") = py::none(),
       R"(ATE (SE(3)-aligned and aligned at the first pose), RPE and KITTI segment errors, as
-`rovermap eval` prints them (a dict with the DESIGN 8 keys: ate_rmse_m, ate_rmse_origin_m, ...).
+`rovermap eval` prints them (a dict with the keys of docs/design.md section 8: ate_rmse_m,
+ate_rmse_origin_m, ...).
 estimate, groundtruth: a TUM or KITTI file's path, or (N, 4, 4) / (N, 3, 4) poses; with
 timestamps for both, poses are associated by time, else by index. **overrides: eval keys, e.g.
 rpe_delta_m=0.5.)");

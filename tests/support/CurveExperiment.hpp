@@ -10,8 +10,8 @@
 // half a step apart, point-to-point pairing alone left 1.3° on a coarse sampling). The
 // knot's size is the one free choice: at 3.9 m the paper's configuration (Θ = 45° plain
 // test) gives 11.5 % and 9.2 % at σ = 8 cm, the paper's 11.35 % and 8.52 %, and test-off
-// 7.9 % and 6.6 % (issue 12 measured 11.4 / 9.6 % and 7.8 / 5.7 % on its own rebuild); at
-// 1.2 m across the test-off errors were 3.4× larger, at 6 m 1.8× smaller.
+// 7.9 % and 6.6 % (an earlier rebuild of the experiment measured 11.4 / 9.6 % and 7.8 /
+// 5.7 %); at 1.2 m across the test-off errors were 3.4× larger, at 6 m 1.8× smaller.
 // Used by tests/test_icp_curves.cpp and bench/bench_curves.cpp.
 
 #include <Eigen/Geometry>

@@ -1,6 +1,6 @@
 #pragma once
-// Small hand-made DEM GeoTIFFs (DESIGN §6 layout: Float32 bands elevation, sigma, count; nodata
-// NaN) for the mosaic tests, and ones lacking what a DEM must have.
+// Small hand-made DEM GeoTIFFs (docs/design.md §6 layout: Float32 bands elevation, sigma, count;
+// nodata NaN) for the mosaic tests, and ones lacking what a DEM must have.
 
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
