@@ -150,7 +150,9 @@ std::string ReadConfigFile(const std::filesystem::path& file) {
   return std::move(*text);
 }
 
-void ApplyYaml(Config& config, std::string_view yaml, const std::filesystem::path& file) {
+// Returns the keys the file set, each with its line.
+std::map<std::string, int> ApplyYaml(Config& config, std::string_view yaml,
+                                     const std::filesystem::path& file) {
   Source source{file.string(), {}};
   YAML::Node root;
   try {
@@ -162,7 +164,7 @@ void ApplyYaml(Config& config, std::string_view yaml, const std::filesystem::pat
                                         std::to_string(e.mark.column + 1);
     throw ConfigError(where + ": invalid YAML: " + e.msg);
   }
-  if (root.IsNull()) return;  // an empty file keeps the defaults
+  if (root.IsNull()) return {};  // an empty file keeps the defaults
   if (!root.IsMap()) {
     throw ConfigError(Where(source, root.Mark()) +
                       "expected a mapping of sections (e.g. registration:) at the top level" +
@@ -174,6 +176,7 @@ void ApplyYaml(Config& config, std::string_view yaml, const std::filesystem::pat
     }
     Apply(config, source, item.first.Scalar(), item.second, item.first.Mark());
   }
+  return source.lines;
 }
 
 std::string Trim(const std::string& text) {
@@ -201,55 +204,102 @@ void ApplyOverride(Config& config, const std::string& text) {
 
 }  // namespace
 
-// Checks between keys, after every source has been applied.
+namespace detail {
+
+const std::vector<KeyRule>& Rules() {
+  using Broken = std::optional<std::string>;
+  // "must be VALID (got VALUE)", the message of most rules.
+  auto must_be = [](const std::string& valid, const std::string& got = "") -> Broken {
+    return "must be " + valid + (got.empty() ? "" : " (got " + got + ")");
+  };
+  auto three_numbers = [](const std::vector<double>& list) -> Broken {
+    if (list.size() == 3) return std::nullopt;
+    return "expected a list of 3 numbers (got " + std::to_string(list.size()) + ")";
+  };
+  static const std::vector<KeyRule> rules = {
+      {"registration.residual", "not point_to_plane with geometry: curve",
+       [](const Config& c) -> Broken {
+         if (c.registration.geometry != registration::Geometry::kCurve ||
+             c.registration.residual != registration::Residual::kPointToPlane) {
+           return std::nullopt;
+         }
+         return "point_to_plane needs surface normals; with geometry: curve set "
+                "registration.residual=auto or point_to_point";
+       }},
+      {"stereo.num_disparities", "a multiple of 16",
+       [must_be](const Config& c) -> Broken {
+         const int n = c.stereo.num_disparities;
+         return n % 16 == 0 ? std::nullopt : must_be("a multiple of 16", std::to_string(n));
+       }},
+      {"stereo.block_size", "odd",
+       [must_be](const Config& c) -> Broken {
+         const int n = c.stereo.block_size;
+         return n % 2 != 0 ? std::nullopt : must_be("odd", std::to_string(n));
+       }},
+      {"stereo.subpixel_window_px", "0 or odd and >= 3",
+       [must_be](const Config& c) -> Broken {
+         const int n = c.stereo.subpixel_window_px;
+         if (n == 0 || (n >= 3 && n % 2 != 0)) return std::nullopt;
+         return must_be("0 or odd and >= 3", std::to_string(n));
+       }},
+      {"stereo.block_size", "in [5, 255] with algorithm: bm",
+       [must_be](const Config& c) -> Broken {
+         const auto& st = c.stereo;
+         const bool fits = st.block_size >= 5 && st.block_size <= 255;
+         if (st.algorithm != stereo::Algorithm::kBm || fits) return std::nullopt;
+         return must_be("in [5, 255] with algorithm: bm");
+       }},
+      {"stereo.p2", "> stereo.p1 when both are > 0",
+       [must_be](const Config& c) -> Broken {
+         const auto& st = c.stereo;
+         if (st.p1 > 0 && st.p2 > 0 && st.p2 <= st.p1) return must_be("> stereo.p1");
+         return std::nullopt;
+       }},
+      {"stereo.max_range_m", "> stereo.min_range_m",
+       [must_be](const Config& c) -> Broken {
+         if (c.stereo.max_range_m > c.stereo.min_range_m) return std::nullopt;
+         return must_be("> stereo.min_range_m");
+       }},
+      {"sim.image_height",
+       "sim.image_width x sim.image_height <= " + std::to_string(kMaxImagePixels) + " pixels",
+       [](const Config& c) -> Broken {
+         const long long pixels = static_cast<long long>(c.sim.image_width) * c.sim.image_height;
+         if (pixels <= kMaxImagePixels) return std::nullopt;
+         return "sim.image_width x sim.image_height = " + std::to_string(pixels) +
+                " pixels, more than " + std::to_string(kMaxImagePixels);
+       }},
+      {"bag.T_body_sensor_translation", "exactly 3 of them",
+       [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_translation); }},
+      {"bag.T_body_sensor_rpy_deg", "exactly 3 of them",
+       [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_rpy_deg); }},
+      {"sim.terrain_cell_m", "sim.terrain_size_m / sim.terrain_cell_m < 20000",
+       [](const Config& c) -> Broken {
+         if (c.sim.terrain_size_m / c.sim.terrain_cell_m < 20000) return std::nullopt;
+         return "too small for sim.terrain_size_m (more than 20000 samples along an edge)";
+       }},
+  };
+  return rules;
+}
+
+std::vector<std::string> KeysSetIn(const std::filesystem::path& file) {
+  Config config;
+  const std::map<std::string, int> lines = ApplyYaml(config, ReadConfigFile(file), file);
+  std::vector<std::string> keys;
+  for (const auto& [key, line] : lines) keys.push_back(key);
+  std::stable_sort(keys.begin(), keys.end(), [&](const std::string& a, const std::string& b) {
+    return lines.at(a) < lines.at(b);
+  });
+  return keys;
+}
+
+}  // namespace detail
+
+// Checks between keys, after every source has been applied: the first broken rule.
 static void ValidateCombinations(const Config& config) {
-  const auto& r = config.registration;
-  if (r.geometry == registration::Geometry::kCurve &&
-      r.residual == registration::Residual::kPointToPlane) {
-    throw ConfigError(
-        "registration.residual: point_to_plane needs surface normals; with geometry: curve set "
-        "registration.residual=auto or point_to_point");
-  }
-  const auto& st = config.stereo;
-  if (st.num_disparities % 16 != 0) {
-    throw ConfigError("stereo.num_disparities: must be a multiple of 16 (got " +
-                      std::to_string(st.num_disparities) + ")");
-  }
-  if (st.block_size % 2 == 0) {
-    throw ConfigError("stereo.block_size: must be odd (got " + std::to_string(st.block_size) + ")");
-  }
-  if (st.subpixel_window_px != 0 && (st.subpixel_window_px < 3 || st.subpixel_window_px % 2 == 0)) {
-    throw ConfigError("stereo.subpixel_window_px: must be 0 or odd and >= 3 (got " +
-                      std::to_string(st.subpixel_window_px) + ")");
-  }
-  if (st.algorithm == stereo::Algorithm::kBm && (st.block_size < 5 || st.block_size > 255)) {
-    throw ConfigError("stereo.block_size: must be in [5, 255] with algorithm: bm");
-  }
-  if (st.p1 > 0 && st.p2 > 0 && st.p2 <= st.p1) {
-    throw ConfigError("stereo.p2: must be > stereo.p1");
-  }
-  if (st.max_range_m <= st.min_range_m) {
-    throw ConfigError("stereo.max_range_m: must be > stereo.min_range_m");
-  }
-  const long long sim_pixels =
-      static_cast<long long>(config.sim.image_width) * config.sim.image_height;
-  if (sim_pixels > detail::kMaxImagePixels) {
-    throw ConfigError(
-        "sim.image_height: sim.image_width x sim.image_height = " + std::to_string(sim_pixels) +
-        " pixels, more than " + std::to_string(detail::kMaxImagePixels));
-  }
-  for (const auto& [key, list] :
-       {std::pair{"bag.T_body_sensor_translation", &config.bag.T_body_sensor_translation},
-        std::pair{"bag.T_body_sensor_rpy_deg", &config.bag.T_body_sensor_rpy_deg}}) {
-    if (list->size() != 3) {
-      throw ConfigError(std::string(key) + ": expected a list of 3 numbers (got " +
-                        std::to_string(list->size()) + ")");
+  for (const detail::KeyRule& rule : detail::Rules()) {
+    if (const std::optional<std::string> broken = rule.check(config)) {
+      throw ConfigError(rule.key + ": " + *broken);
     }
-  }
-  if (config.sim.terrain_size_m / config.sim.terrain_cell_m >= 20000) {
-    throw ConfigError(
-        "sim.terrain_cell_m: too small for sim.terrain_size_m (more than 20000 "
-        "samples along an edge)");
   }
 }
 

@@ -29,12 +29,31 @@ class ValueError : public std::runtime_error {
 struct KeyEntry {
   std::string key;  ///< "registration.max_iterations"
   std::string doc;  ///< "[count] ...": the comment DumpYaml writes after the value
+  // The same parts apart, for the reference page (config/KeyReference.hpp).
+  std::string unit;   ///< "m", "count"; "" for switches, enumerations, names and text
+  std::string help;   ///< the doc without its unit and range
+  std::string valid;  ///< what the parser accepts: "> 0", "integer in [1, 63]", "one of: a, b"
   std::function<void(const YAML::Node&, Config&)> parse;  ///< @throw ValueError
   std::function<std::string(const Config&)> print;        ///< YAML text that parses back
 };
 
 /// Every key, grouped by section, in DumpYaml order.
 const std::vector<KeyEntry>& Registry();
+
+/// A check between keys, made once every source is applied (LoadConfig), in this order.
+struct KeyRule {
+  std::string key;    ///< the key its message names
+  std::string valid;  ///< what the reference adds to that key's valid values
+  /// nullopt when met, else the message after "KEY: "
+  std::function<std::optional<std::string>(const Config&)> check;
+};
+
+/// Every rule between keys.
+const std::vector<KeyRule>& Rules();
+
+/// The dotted keys `file` sets, in the file's order (its values are not checked against each
+/// other: LoadConfig does that). @throw ConfigError as LoadConfig.
+std::vector<std::string> KeysSetIn(const std::filesystem::path& file);
 
 /// The bytes of `path`; nullopt if it cannot be opened or read (the caller names the file).
 std::optional<std::string> ReadText(const std::filesystem::path& path);
@@ -80,9 +99,9 @@ template <typename E>
 using EnumNames = std::vector<std::pair<std::string, E>>;
 
 template <typename E>
-std::string JoinNames(const EnumNames<E>& names) {
+std::string JoinNames(const EnumNames<E>& names, const std::string& separator = "|") {
   std::string joined;
-  for (const auto& [name, value] : names) joined += (joined.empty() ? "" : "|") + name;
+  for (const auto& [name, value] : names) joined += (joined.empty() ? "" : separator) + name;
   return joined;
 }
 
@@ -113,8 +132,10 @@ class SectionKeys {
 
   void Int(const std::string& key, int Section::*field, const std::string& unit, Bounds bounds,
            const std::string& doc) {
+    const std::string range = Describe(bounds);
     Add(
         key, Comment(unit, doc, bounds),
+        {unit, doc, range.empty() ? "any integer" : "integer " + range},
         [s = section_, field, bounds](const YAML::Node& n, Config& c) {
           (c.*s).*field = ParseInt(n, bounds);
         },
@@ -123,8 +144,9 @@ class SectionKeys {
 
   void Double(const std::string& key, double Section::*field, const std::string& unit,
               Bounds bounds, const std::string& doc) {
+    const std::string range = Describe(bounds);
     Add(
-        key, Comment(unit, doc, bounds),
+        key, Comment(unit, doc, bounds), {unit, doc, range.empty() ? "any number" : range},
         [s = section_, field, bounds](const YAML::Node& n, Config& c) {
           (c.*s).*field = ParseDouble(n, bounds);
         },
@@ -134,10 +156,10 @@ class SectionKeys {
   /// A non-empty YAML list of numbers, each within `bounds` (a single number is a list of one).
   void DoubleList(const std::string& key, std::vector<double> Section::*field,
                   const std::string& unit, Bounds bounds, const std::string& doc) {
+    const std::string each = Describe(bounds).empty() ? "" : "each " + Describe(bounds);
     Add(
-        key,
-        "[" + unit + ", list] " + doc +
-            (Describe(bounds).empty() ? std::string() : "; each " + Describe(bounds)),
+        key, "[" + unit + ", list] " + doc + (each.empty() ? "" : "; " + each),
+        {unit, doc, "list of numbers" + (each.empty() ? "" : ", " + each)},
         [s = section_, field, bounds](const YAML::Node& n, Config& c) {
           std::vector<double> values;
           if (n.IsSequence()) {
@@ -160,6 +182,9 @@ class SectionKeys {
             const std::string& doc) {
     Add(
         key, "[name] " + doc,
+        {"", doc,
+         std::string("topic or frame name (letters, digits, _ / . -)") +
+             (allow_empty ? " or \"\"" : "")},
         [s = section_, field, allow_empty](const YAML::Node& n, Config& c) {
           (c.*s).*field = ParseName(n, allow_empty);
         },
@@ -172,7 +197,7 @@ class SectionKeys {
   /// Free text (any characters, "" allowed), printed double-quoted.
   void Text(const std::string& key, std::string Section::*field, const std::string& doc) {
     Add(
-        key, "[text] " + doc,
+        key, "[text] " + doc, {"", doc, "any text"},
         [s = section_, field](const YAML::Node& n, Config& c) {
           (c.*s).*field = n.IsNull() ? std::string() : ScalarText(n);
         },
@@ -181,7 +206,7 @@ class SectionKeys {
 
   void Bool(const std::string& key, bool Section::*field, const std::string& doc) {
     Add(
-        key, "[true|false] " + doc,
+        key, "[true|false] " + doc, {"", doc, "true or false"},
         [s = section_, field](const YAML::Node& n, Config& c) { (c.*s).*field = ParseBool(n); },
         [s = section_, field](const Config& c) { return (c.*s).*field ? "true" : "false"; });
   }
@@ -190,7 +215,7 @@ class SectionKeys {
   void Enum(const std::string& key, E Section::*field, const EnumNames<E>& names,
             const std::string& doc) {
     Add(
-        key, "[" + JoinNames(names) + "] " + doc,
+        key, "[" + JoinNames(names) + "] " + doc, {"", doc, "one of: " + JoinNames(names, ", ")},
         [s = section_, field, names](const YAML::Node& n, Config& c) {
           (c.*s).*field = ParseEnum(n, names);
         },
@@ -204,10 +229,19 @@ class SectionKeys {
     return "[" + unit + "] " + doc + (range.empty() ? "" : "; " + range);
   }
 
-  void Add(const std::string& key, std::string doc,
+  // The reference's unit, help and valid values of a key.
+  struct Parts {
+    std::string unit;
+    std::string help;
+    std::string valid;
+  };
+
+  void Add(const std::string& key, std::string doc, Parts parts,
            std::function<void(const YAML::Node&, Config&)> parse,
            std::function<std::string(const Config&)> print) {
-    keys_.push_back({name_ + "." + key, std::move(doc), std::move(parse), std::move(print)});
+    keys_.push_back({name_ + "." + key, std::move(doc), std::move(parts.unit),
+                     std::move(parts.help), std::move(parts.valid), std::move(parse),
+                     std::move(print)});
   }
 
   std::vector<KeyEntry>& keys_;
