@@ -120,7 +120,7 @@ struct PoseSpread {
 struct QueryMemo {
   static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
-  double others_sq = 0.0;      // every point but `closest` was at least this far [m²]
+  double others_sq = 0.0;       // every point but `closest` was at least this far [m²]
   std::size_t closest = kNone;  // found within the bound of that search, or kNone
   std::size_t hint = kNone;     // the last closest point found, kept across misses
   bool valid = false;
@@ -181,9 +181,9 @@ std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
     const std::size_t i = queries[static_cast<std::size_t>(q) * step];
     const Eigen::Vector3d p = T_to_from * pts[i];
     bool searched = false;
-    const Neighbor nb = (*memos)[i].Lookup(
-        tree, to.cloud().points, p, spread.Radius(p, dmax, kSeedGateSearchSigmas), reuse,
-        &searched);
+    const Neighbor nb =
+        (*memos)[i].Lookup(tree, to.cloud().points, p,
+                           spread.Radius(p, dmax, kSeedGateSearchSigmas), reuse, &searched);
     searched_total += searched;
     if (!nb.found) continue;
     local[static_cast<std::size_t>(q)] =
@@ -246,8 +246,8 @@ Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& targe
 // squared Mahalanobis distance dᵀ(R Λx Rᵀ + Λy + Λpose)⁻¹ d (§4.4) instead. Λpose spreads the
 // pose's own uncertainty to the point p (δr × p + δt): without it the gate, unlike Dmax, is
 // anchored to the seed from the first iteration, and a seed a degree off in heading gates out
-// exactly the far points that would turn it back (issue 31: 60-75 % of such a seed's heading
-// error stayed in KITTI's registered increments).
+// exactly the far points that would turn it back (without it, 60-75 % of a 0.4°/m seed's
+// heading error stayed in KITTI's registered increments).
 // A kept pair's §4.4 weight comes from the same R Λx Rᵀ + Λy: 1 / tr(· + sampling) for
 // point-to-point, and for point-to-plane the inverse variance of the residual along the normal,
 // 1 / nᵀ(R Λx Rᵀ + Λy)n. Returns the weight (0 for a pair that carries nothing along its
@@ -404,6 +404,71 @@ std::vector<std::size_t> Decimate(std::vector<std::size_t> indices, int max_poin
   return kept;
 }
 
+// The information a point-to-plane pair's normal error alone adds (noise_information): a
+// normal tilted by δn (⊥ n) adds δnᵀj to the row, and on featureless ground that is all the
+// information the in-plane directions get. δn's covariance is taken from how far the pair's two
+// normals disagree (half the outer product of their difference in the tangent plane): the
+// ground's shape is common to both frames, their noise and sensor-fixed artefacts (range bins,
+// pixel locking: they moved with the sensor) are not. Without a source normal, from the
+// target's own expected error (spread²/2 per axis).
+Eigen::Matrix<double, 6, 6> NormalNoise(const IndexedCloud& source, const IndexedCloud& target,
+                                        const Match& m, const Eigen::Matrix3d& rotation,
+                                        const Eigen::Matrix<double, 3, 6>& j,
+                                        bool floor_from_pairs) {
+  const Eigen::Vector3d& nrm = target.orientation(m.target_index);
+  const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
+  const Eigen::Vector3d source_normal =
+      floor_from_pairs ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
+                       : Eigen::Vector3d::Zero();
+  Eigen::Matrix3d tilt;
+  if (!source_normal.isZero()) {
+    const Eigen::Vector3d diff =
+        tangent * (source_normal.dot(nrm) < 0.0 ? -source_normal : source_normal);
+    tilt = 0.5 * diff * diff.transpose();
+  } else {
+    const double spread = target.orientation_spread(m.target_index);
+    tilt = 0.5 * spread * spread * tangent;
+  }
+  return j.transpose() * tilt * j;
+}
+
+// The information of the final pairs (and its noise floor) into the result, with the
+// covariance its inverse; without per-point covariances the residual variance is estimated
+// from the fit. False when there are too few pairs for that.
+bool SetInformation(Eigen::Matrix<double, 6, 6> info, Eigen::Matrix<double, 6, 6> floor,
+                    std::size_t n, double sum_sq, bool plane, bool use_uncertainty,
+                    RegistrationResult* result) {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  const double dof = plane ? static_cast<double>(n) - 6.0 : 3.0 * static_cast<double>(n) - 6.0;
+  if (n < 3 || dof <= 0.0) return false;
+  if (!use_uncertainty) {
+    info /= std::max(sum_sq / dof, 1e-24);
+    floor /= std::max(sum_sq / dof, 1e-24);
+  }
+  result->information = info;
+  result->noise_information = floor;
+  const Eigen::FullPivLU<Mat6> lu(info);
+  if (lu.isInvertible()) result->covariance = lu.inverse();
+  return true;
+}
+
+// The extent (farthest matched source point from the sensor, at T) and the conditioning:
+// smallest over largest eigenvalue of the information with rotations scaled to metres there.
+void SetConditioning(const IndexedCloud& source, const std::vector<Match>& matches,
+                     const Eigen::Isometry3d& T, const Eigen::Matrix<double, 6, 6>& info,
+                     RegistrationResult* result) {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  double extent = 0.0;
+  for (const Match& m : matches)
+    extent = std::max(extent, (T * source.cloud().points[m.source_index] - T.translation()).norm());
+  result->extent_m = extent;
+  Mat6 s = Mat6::Identity();
+  s.topLeftCorner<3, 3>() *= 1.0 / std::max(extent, 1e-9);
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(s * info * s);
+  const auto ev = eig.eigenvalues();
+  result->conditioning = ev(5) > 0.0 ? std::max(0.0, ev(0)) / ev(5) : 0.0;
+}
+
 // Information of the estimate from the final pairs (see RegistrationResult).
 void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
                         const std::vector<Match>& matches, const Eigen::Isometry3d& T,
@@ -434,29 +499,8 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
       if (nrm.isZero()) continue;
       const Eigen::Matrix<double, 1, 6> jp = nrm.transpose() * j;
       const double e = nrm.dot(d);
-      // A normal tilted by δn (⊥ n) adds δnᵀj to the row: on featureless ground that is all
-      // the information the in-plane directions get. δn's covariance is taken from how far the
-      // pair's two normals disagree (half the outer product of their difference in the tangent
-      // plane): the ground's shape is common to both frames, their noise and sensor-fixed
-      // artefacts (range bins, pixel locking: they moved with the sensor) are not. Without a
-      // source normal, from the target's own expected error (spread²/2 per axis).
-      Mat6 noise = Mat6::Zero();
-      if (has_floor) {
-        const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
-        const Eigen::Vector3d source_normal =
-            floor_from_pairs ? Eigen::Vector3d(rotation * source.orientation(m.source_index))
-                             : Eigen::Vector3d::Zero();
-        Eigen::Matrix3d tilt;
-        if (!source_normal.isZero()) {
-          const Eigen::Vector3d diff =
-              tangent * (source_normal.dot(nrm) < 0.0 ? -source_normal : source_normal);
-          tilt = 0.5 * diff * diff.transpose();
-        } else {
-          const double spread = target.orientation_spread(m.target_index);
-          tilt = 0.5 * spread * spread * tangent;
-        }
-        noise = j.transpose() * tilt * j;
-      }
+      const Mat6 noise =
+          has_floor ? NormalNoise(source, target, m, rotation, j, floor_from_pairs) : Mat6::Zero();
       if (options.use_uncertainty) {
         const double var =
             nrm.dot(PairCovariance(source.cloud(), target.cloud(), m, rotation, 0.0) * nrm);
@@ -480,29 +524,375 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
     }
     ++n;
   }
-  const double dof = plane ? static_cast<double>(n) - 6.0 : 3.0 * static_cast<double>(n) - 6.0;
-  if (n < 3 || dof <= 0.0) return;
-  // Without per-point covariances the residual variance is estimated from the fit.
-  if (!options.use_uncertainty) {
-    info /= std::max(sum_sq / dof, 1e-24);
-    floor /= std::max(sum_sq / dof, 1e-24);
-  }
-  result->information = info;
-  result->noise_information = floor;
-  const Eigen::FullPivLU<Mat6> lu(info);
-  if (lu.isInvertible()) result->covariance = lu.inverse();
-
-  // Conditioning with rotations scaled to metres at the cloud's extent.
-  double extent = 0.0;
-  for (const Match& m : matches)
-    extent = std::max(extent, (T * source.cloud().points[m.source_index] - T.translation()).norm());
-  result->extent_m = extent;
-  Mat6 s = Mat6::Identity();
-  s.topLeftCorner<3, 3>() *= 1.0 / std::max(extent, 1e-9);
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(s * info * s);
-  const auto ev = eig.eigenvalues();
-  result->conditioning = ev(5) > 0.0 ? std::max(0.0, ev(0)) / ev(5) : 0.0;
+  if (!SetInformation(info, floor, n, sum_sq, plane, options.use_uncertainty, result)) return;
+  SetConditioning(source, matches, T, result->information, result);
 }
+
+// Register's preconditions; false with the status and message set when one fails.
+bool CheckInputs(const IndexedCloud& source, const IndexedCloud& target,
+                 const RegistrationOptions& options, RegistrationResult* result) {
+  auto fail = [&](RegistrationStatus status, std::string message) {
+    result->status = status;
+    result->message = std::move(message);
+    return false;
+  };
+  if (source.cloud().size() < 3 || target.cloud().size() < 3) {
+    return fail(RegistrationStatus::kTooFewPoints, "need at least 3 points in each cloud (source " +
+                                                       std::to_string(source.cloud().size()) +
+                                                       ", target " +
+                                                       std::to_string(target.cloud().size()) + ")");
+  }
+  if (options.use_uncertainty &&
+      (!source.cloud().HasCovariances() || !target.cloud().HasCovariances())) {
+    return fail(RegistrationStatus::kInvalidInput,
+                "use_uncertainty needs per-point covariances in both clouds");
+  }
+  if (options.geometry == Geometry::kCurve &&
+      EffectiveResidual(options) == Residual::kPointToPlane) {
+    return fail(RegistrationStatus::kInvalidInput,
+                "point_to_plane needs surface normals; curves have tangents only");
+  }
+  if (NeedsOrientations(options) && (!target.HasOrientations() || !source.HasOrientations())) {
+    return fail(RegistrationStatus::kInvalidInput,
+                "clouds were indexed without orientations the options need");
+  }
+  return true;
+}
+
+bool Accelerates(const RegistrationOptions& o) {
+  return o.acceleration == Acceleration::kAnderson ||
+         (o.acceleration == Acceleration::kAuto && EffectiveResidual(o) == Residual::kPointToPoint);
+}
+
+// The iterative matching of §4.3, one named step a member: what one iteration hands to the
+// next (T, Dmax, the seed gate's spread, the query memos, the acceleration's history) lives
+// here, so Register reads as the paper's steps a to f.
+class MatchingLoop {
+ public:
+  MatchingLoop(const IndexedCloud& source, const IndexedCloud& target,
+               const RegistrationOptions& options, const Eigen::Isometry3d& T_init)
+      : source_(source),
+        target_(target),
+        options_(options),
+        symmetric_(options.criterion == Criterion::kSymmetric),
+        need_orientations_(NeedsOrientations(options)),
+        orientation_test_(options),
+        accelerate_(Accelerates(options)),
+        anderson_(accelerate_ ? options.anderson_depth : 0),
+        T_(T_init),
+        T_plain_(T_init) {}
+
+  double dmax() const { return dmax_; }
+  bool Coarse(int it) const { return use_coarse_ && it <= options_.coarse_iterations; }
+
+  // D and the initial Dmax = 20 D (§4.3), the seed gate, the sample and the orientation test's
+  // staging. False (status set) when D cannot be derived.
+  bool Prepare(RegistrationResult* result) {
+    d_ref_ =
+        options_.reference_distance_m > 0.0 ? options_.reference_distance_m : target_.spacing();
+    result->reference_distance_m = d_ref_;
+    if (!(d_ref_ > 0.0)) {
+      result->status = RegistrationStatus::kTooFewPoints;
+      result->message = "cannot derive the reference distance D: target points coincide";
+      return false;
+    }
+    dmax_ = options_.dmax_initial_factor * d_ref_;
+    spread_.rotation_var_rad2 = std::pow(options_.seed_rotation_sigma_deg * kDegToRad, 2);
+    spread_.translation_var_m2 = std::pow(options_.seed_translation_sigma_m, 2);
+    // Per-axis variance of the offset between two independent samplings of spacing D.
+    sampling_variance_ = d_ref_ * d_ref_ / 12.0;
+    translation_tol_ =
+        options_.translation_tolerance_m > 0.0 ? options_.translation_tolerance_m : d_ref_ / 100.0;
+    // The source points that are matched: one per voxel of edge sample_voxel_factor · D,
+    // then at most max_sample_points of those, evenly through the input order.
+    const double voxel_m =
+        options_.sample_voxel_factor > 0.0 ? options_.sample_voxel_factor * d_ref_ : 0.0;
+    source_sample_ =
+        Decimate(VoxelSample(source_.cloud().points, voxel_m), options_.max_sample_points);
+    if (symmetric_)
+      target_sample_ =
+          Decimate(VoxelSample(target_.cloud().points, voxel_m), options_.max_sample_points);
+    result->sample_points = source_sample_.size();
+    PlanStages();
+    forward_memos_.resize(source_.cloud().size());
+    backward_memos_.resize(symmetric_ ? target_.cloud().size() : 0);
+    return true;
+  }
+
+  // A new stage (coarse subset or the whole sample) is a new objective: no history, no
+  // unverified extrapolation; and the staged orientation test is dropped or widened.
+  void BeginStage(bool coarse, RegistrationResult* result) {
+    const std::size_t step = coarse ? static_cast<std::size_t>(options_.coarse_step) : 1;
+    if (step == previous_step_) return;
+    anderson_.Reset();
+    if (extrapolated_) T_ = T_plain_;
+    extrapolated_ = false;
+    if (!staged_test_ || coarse || !orientation_test_.enabled) return;
+    if (coarse_rejected_fraction_ < options_.orientation_min_rejected) {
+      orientation_test_.enabled = false;
+      if (options_.clean_sample_step > 1) {
+        const auto clean_step = static_cast<std::size_t>(options_.clean_sample_step);
+        source_sample_ = EveryKth(source_sample_, clean_step);
+        target_sample_ = EveryKth(target_sample_, clean_step);
+        result->sample_points = source_sample_.size();
+      }
+    } else {
+      RequireQueried(1);
+    }
+  }
+
+  // a. Closest points at T; an extrapolated T must not raise the energy over the previous
+  // pose's at the current bound, or the plain iterate is matched instead.
+  IterationTrace MatchClosestPoints(int it, bool coarse) {
+    const std::size_t step = coarse ? static_cast<std::size_t>(options_.coarse_step) : 1;
+    IterationTrace trace;
+    trace.iteration = it;
+    std::size_t queries = MatchAtT(step, &trace);
+    bool rejected = false;
+    if (extrapolated_ && TruncatedEnergy(distances_, queries, dmax_) >
+                             TruncatedEnergy(previous_distances_, previous_queries_, dmax_)) {
+      T_ = T_plain_;
+      anderson_.Reset();
+      rejected = true;
+      MatchAtT(step, &trace);
+    }
+    trace.accelerated = extrapolated_ && !rejected;
+    trace.extrapolation_rejected = rejected;
+    extrapolated_ = false;                              // T is checked now (or plain)
+    if (accelerate_) previous_distances_ = distances_;  // only the safeguard reads them
+    previous_queries_ = queries;
+    previous_step_ = step;
+    trace.queries = rejected ? 2 * queries : queries;  // a rejected extrapolation matched twice
+    trace.pairs_found = distances_.size();
+    if (coarse)
+      coarse_rejected_fraction_ = static_cast<double>(trace.pairs_rejected_by_orientation) /
+                                  static_cast<double>(std::max<std::size_t>(
+                                      1, trace.pairs_rejected_by_orientation + distances_.size()));
+    return trace;
+  }
+
+  // b, c. The statistics of the distances set the next Dmax (§4.3, DmaxSchedule).
+  void AdaptDmax(IterationTrace* trace) {
+    const DmaxUpdate update = UpdateDmax(distances_, d_ref_, dmax_, options_.histogram_bins,
+                                         options_.histogram_valley_ratio);
+    dmax_ = update.dmax_m;
+    trace->mean_m = update.mean_m;
+    trace->stddev_m = update.stddev_m;
+    trace->dmax_m = dmax_;
+    trace->branch = update.branch;
+  }
+
+  // d. The pairs within the new Dmax or the gate, and their weights; symmetric: each
+  // direction's term normalised by its own pair count. Returns how many are kept.
+  std::size_t GatePairs(IterationTrace* trace) {
+    KeepWithinGate(source_, target_, T_, dmax_, sampling_variance_, spread_, options_, &matches_,
+                   &weights_);
+    const std::size_t kept = matches_.size();
+    std::size_t forward = 0;
+    for (const Match& m : matches_) forward += !m.backward;
+    const std::size_t backward = kept - forward;
+    double sum_sq = 0.0;
+    for (std::size_t k = 0; k < kept; ++k) {
+      const Match& m = matches_[k];
+      sum_sq += m.distance * m.distance;
+      if (symmetric_) weights_[k] /= static_cast<double>(m.backward ? backward : forward);
+    }
+    trace->pairs_kept = kept;
+    trace->rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
+    return kept;
+  }
+
+  // e. The motion that best aligns the kept pairs, from the original source points.
+  bool SolveMotion(Eigen::Isometry3d* T_new) {
+    *T_new = T_;
+    if (EffectiveResidual(options_) == Residual::kPointToPlane)
+      return PointToPlaneStep(source_, target_, matches_, weights_, T_new);
+    pairs_.clear();
+    for (std::size_t k = 0; k < matches_.size(); ++k)
+      pairs_.push_back({source_.cloud().points[matches_[k].source_index],
+                        target_.cloud().points[matches_[k].target_index], weights_[k]});
+    const MotionEstimate est = options_.solver == Solver::kDualQuaternion
+                                   ? SolveMotionDualQuaternion(pairs_)
+                                   : SolveMotionSvd(pairs_);
+    *T_new = est.T_target_source;
+    return est.valid;
+  }
+
+  // f. Takes the plain step T_new (recorded in the trace) and says whether to stop: the step
+  // is below the tolerances, or the iterates cycle. The seed gate closes as the steps shrink.
+  bool Settle(const Eigen::Isometry3d& T_new, bool coarse, IterationTrace* trace,
+              RegistrationResult* result) {
+    trace->step_translation_m = (T_new.translation() - T_.translation()).norm();
+    trace->step_rotation_deg =
+        Eigen::AngleAxisd(T_new.linear() * T_.linear().transpose()).angle() * kRadToDeg;
+    result->trace.push_back(*trace);
+    const bool small_step =
+        options_.convergence == Convergence::kRelative
+            ? RelativeConverged(T_, T_new, options_.relative_tolerance, d_ref_ * 1e-4)
+            : trace->step_translation_m < translation_tol_ &&
+                  trace->step_rotation_deg < options_.rotation_tolerance_deg;
+    const bool cycling = !small_step && Cycling(T_new);
+    // What is left of the seed's uncertainty is at most a few times this step: the gate closes
+    // as the estimate settles, and is the sensor's alone once it has.
+    spread_.rotation_var_rad2 =
+        std::min(spread_.rotation_var_rad2,
+                 std::pow(kSeedGateStepFactor * trace->step_rotation_deg * kDegToRad, 2));
+    spread_.translation_var_m2 = std::min(
+        spread_.translation_var_m2, std::pow(kSeedGateStepFactor * trace->step_translation_m, 2));
+    if (recent_.size() == kCycleMemory) recent_.erase(recent_.begin());
+    recent_.push_back(T_);  // the iterate before this one: comparing with it is the step test
+    T_prev_ = T_;
+    T_ = T_new;
+    result->iterations = trace->iteration;
+    // In the coarse stage a small step only means the subset has settled: go on to all points.
+    return (small_step || cycling) && !coarse;
+  }
+
+  // Anderson's extrapolation from the plain step (checked at the next matching).
+  void Extrapolate() {
+    const AndersonAccelerator::Vector6 g = PoseParameters(T_);
+    const AndersonAccelerator::Vector6 next = anderson_.Next(PoseParameters(T_prev_), g);
+    extrapolated_ = next != g;
+    if (extrapolated_) {
+      T_plain_ = T_;
+      T_ = PoseFromParameters(next);
+    }
+  }
+
+  // The estimate (never an unchecked extrapolation), its final pairs, inliers, RMS and
+  // information.
+  void Finish(RegistrationResult* result) {
+    if (extrapolated_) T_ = T_plain_;
+    result->converged = result->status == RegistrationStatus::kConverged;
+    result->T_target_source = T_;
+    result->dmax_m = dmax_;
+    matches_.clear();
+    MatchDirection(source_, target_, T_, dmax_, PoseSpread(), orientation_test_, source_sample_, 1,
+                   false, need_orientations_, options_.reuse_closest_points, &forward_memos_,
+                   &matches_, nullptr);
+    KeepWithinGate(source_, target_, T_, dmax_, sampling_variance_, PoseSpread(), options_,
+                   &matches_, &weights_);
+    const std::size_t kept = matches_.size();
+    double sum_sq = 0.0;
+    for (const Match& m : matches_) sum_sq += m.distance * m.distance;
+    result->inliers = kept;
+    result->inlier_ratio = source_sample_.empty() ? 0.0
+                                                  : static_cast<double>(kept) /
+                                                        static_cast<double>(source_sample_.size());
+    result->rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
+    ComputeInformation(source_, target_, matches_, T_, sampling_variance_, options_, result);
+  }
+
+ private:
+  // Iterates a cycle may span (see Cycling).
+  static constexpr std::size_t kCycleMemory = 8;
+
+  // The orientation test needs the queried points' own orientations. Staged, it is first run
+  // on the coarse subset only, and kept for the fine stage only if it rejected enough of the
+  // coarse pairs (`orientation_min_rejected`): on clean scans it removes next to nothing, and
+  // the source's PCA normals over the whole sample were most of its cost. A source with given
+  // normals (stereo) pays nothing for the test and gets no coarse stage from it: coarse to
+  // fine moved each stereo frame's stopping point by up to 0.05° and raised the default
+  // simulated stereo replay's ATE from 1.05 to 1.60 cm (three other seeds: −0.8 to +0.01 cm).
+  // A stage of 10 iterations on every 5th point took a fifth off KITTI's registration time at
+  // the same accuracy over 51 frames, but broke a frame of a 0.8°/m seed on 20 of them and ran
+  // the simulated cloud traverse (given normals) to the iteration limit twice: not adopted.
+  // Dropped, it also thins the fine stage (clean_sample_step): pairs the coarse stage found
+  // clean give the same accuracy from a quarter of the sample, and the fine queries and the
+  // target normals they need were most of what was left.
+  // Coarse to fine (§4.5) pays where queries are many; a coarse subset of a few dozen points
+  // (a 200-point curve: 20) makes a poor estimate and saves nothing.
+  void PlanStages() {
+    constexpr std::size_t kMinCoarseQueries = 500;
+    const bool stage_test = options_.staged_orientation_test && orientation_test_.enabled &&
+                            source_.EstimatesOrientations();
+    use_coarse_ =
+        (options_.coarse_to_fine || stage_test) && options_.coarse_iterations > 0 &&
+        options_.coarse_step > 1 &&
+        source_sample_.size() / static_cast<std::size_t>(options_.coarse_step) >= kMinCoarseQueries;
+    staged_test_ = orientation_test_.enabled && use_coarse_ && options_.staged_orientation_test;
+    if (orientation_test_.enabled)
+      RequireQueried(staged_test_ ? static_cast<std::size_t>(options_.coarse_step) : 1);
+  }
+
+  void RequireQueried(std::size_t step) {
+    const std::vector<std::size_t> s = step > 1 ? EveryKth(source_sample_, step) : source_sample_;
+    const std::vector<std::size_t> t = step > 1 ? EveryKth(target_sample_, step) : target_sample_;
+    source_.RequireOrientations(s);
+    target_.RequireOrientations(t);
+    orientation_test_.spread_cap = MedianSpread(source_, s, target_, t);
+  }
+
+  // One matching at T (both ways for the symmetric criterion): fills matches_ and distances_,
+  // adds to the trace's searches and orientation rejections; returns the queries made.
+  std::size_t MatchAtT(std::size_t step, IterationTrace* trace) {
+    matches_.clear();
+    std::size_t searches = 0;
+    trace->pairs_rejected_by_orientation = MatchDirection(
+        source_, target_, T_, dmax_, spread_, orientation_test_, source_sample_, step, false,
+        need_orientations_, options_.reuse_closest_points, &forward_memos_, &matches_, &searches);
+    std::size_t n = (source_sample_.size() + step - 1) / step;
+    if (symmetric_) {
+      trace->pairs_rejected_by_orientation +=
+          MatchDirection(target_, source_, T_.inverse(), dmax_, spread_, orientation_test_,
+                         target_sample_, step, true, need_orientations_,
+                         options_.reuse_closest_points, &backward_memos_, &matches_, &searches);
+      n += (target_sample_.size() + step - 1) / step;
+    }
+    trace->searches += searches;
+    distances_.clear();
+    for (const Match& m : matches_) distances_.push_back(m.distance);
+    return n;
+  }
+
+  // A cycle: the pairs flip between a few sets and the plain iterate comes back to within the
+  // stopping tolerances of one of the last few (seen on stereo frames: period 2 to 7, steps of
+  // 0.005° that never went below the rotation tolerance, so every such frame ran to
+  // max_iterations). The estimate cannot get better than that.
+  bool Cycling(const Eigen::Isometry3d& T_new) const {
+    if (options_.convergence != Convergence::kAbsolute) return false;
+    bool cycling = false;
+    for (const Eigen::Isometry3d& earlier : recent_) {
+      cycling |=
+          (T_new.translation() - earlier.translation()).norm() < translation_tol_ &&
+          Eigen::AngleAxisd(T_new.linear() * earlier.linear().transpose()).angle() * kRadToDeg <
+              options_.rotation_tolerance_deg;
+    }
+    return cycling;
+  }
+
+  const IndexedCloud& source_;
+  const IndexedCloud& target_;
+  const RegistrationOptions& options_;
+  const bool symmetric_;
+  const bool need_orientations_;
+  OrientationTest orientation_test_;
+  const bool accelerate_;
+  AndersonAccelerator anderson_;
+
+  double d_ref_ = 0.0;              // D [m]
+  double dmax_ = 0.0;               // [m]
+  double sampling_variance_ = 0.0;  // [m²]
+  double translation_tol_ = 0.0;    // [m]
+  PoseSpread spread_;               // the seed's uncertainty, shrunk step by step (SeedGate)
+  bool use_coarse_ = false;
+  bool staged_test_ = false;
+  double coarse_rejected_fraction_ = 0.0;  // of the pairs found, in the last coarse iteration
+  std::vector<std::size_t> source_sample_, target_sample_;
+  std::vector<QueryMemo> forward_memos_, backward_memos_;
+
+  Eigen::Isometry3d T_;
+  Eigen::Isometry3d T_plain_;  // the plain iterate behind an extrapolated T_ (the fallback)
+  Eigen::Isometry3d T_prev_ = Eigen::Isometry3d::Identity();  // the iterate before T_
+  bool extrapolated_ = false;  // T_ is an extrapolation the safeguard has not checked yet
+  std::vector<double> previous_distances_;  // the previous pose's, for the safeguard
+  std::size_t previous_queries_ = 0, previous_step_ = 0;
+  std::vector<Eigen::Isometry3d> recent_;
+
+  std::vector<Match> matches_;
+  std::vector<double> distances_, weights_;
+  std::vector<WeightedPair> pairs_;
+};
 
 }  // namespace
 
@@ -573,321 +963,43 @@ RegistrationResult Register(const IndexedCloud& source, const IndexedCloud& targ
                             const Eigen::Isometry3d& T_init, const RegistrationOptions& options) {
   RegistrationResult result;
   result.T_target_source = T_init;
-  if (source.cloud().size() < 3 || target.cloud().size() < 3) {
-    result.status = RegistrationStatus::kTooFewPoints;
-    result.message = "need at least 3 points in each cloud (source " +
-                     std::to_string(source.cloud().size()) + ", target " +
-                     std::to_string(target.cloud().size()) + ")";
-    return result;
-  }
-  const bool symmetric = options.criterion == Criterion::kSymmetric;
-  if (options.use_uncertainty &&
-      (!source.cloud().HasCovariances() || !target.cloud().HasCovariances())) {
-    result.status = RegistrationStatus::kInvalidInput;
-    result.message = "use_uncertainty needs per-point covariances in both clouds";
-    return result;
-  }
-  if (options.geometry == Geometry::kCurve &&
-      EffectiveResidual(options) == Residual::kPointToPlane) {
-    result.status = RegistrationStatus::kInvalidInput;
-    result.message = "point_to_plane needs surface normals; curves have tangents only";
-    return result;
-  }
-  if (NeedsOrientations(options) && (!target.HasOrientations() || !source.HasOrientations())) {
-    result.status = RegistrationStatus::kInvalidInput;
-    result.message = "clouds were indexed without orientations the options need";
-    return result;
-  }
-
-  // D and the initial Dmax = 20 D (§4.3).
-  const double d_ref =
-      options.reference_distance_m > 0.0 ? options.reference_distance_m : target.spacing();
-  result.reference_distance_m = d_ref;
-  if (!(d_ref > 0.0)) {
-    result.status = RegistrationStatus::kTooFewPoints;
-    result.message = "cannot derive the reference distance D: target points coincide";
-    return result;
-  }
-  double dmax = options.dmax_initial_factor * d_ref;
-  PoseSpread spread;  // the seed's uncertainty, shrunk step by step (SeedGate)
-  spread.rotation_var_rad2 = std::pow(options.seed_rotation_sigma_deg * kDegToRad, 2);
-  spread.translation_var_m2 = std::pow(options.seed_translation_sigma_m, 2);
-  OrientationTest orientation_test(options);
-  // Per-axis variance of the offset between two independent samplings of spacing D.
-  const double sampling_variance = d_ref * d_ref / 12.0;
-  const double translation_tol =
-      options.translation_tolerance_m > 0.0 ? options.translation_tolerance_m : d_ref / 100.0;
-
-  // The source points that are matched: one per voxel of edge sample_voxel_factor · D, then at
-  // most max_sample_points of those, evenly through the input order.
-  const double voxel_m =
-      options.sample_voxel_factor > 0.0 ? options.sample_voxel_factor * d_ref : 0.0;
-  std::vector<std::size_t> source_sample =
-      Decimate(VoxelSample(source.cloud().points, voxel_m), options.max_sample_points);
-  std::vector<std::size_t> target_sample =
-      symmetric ? Decimate(VoxelSample(target.cloud().points, voxel_m), options.max_sample_points)
-                : std::vector<std::size_t>();
-  result.sample_points = source_sample.size();
-  const bool need_orientations = NeedsOrientations(options);
-  // The orientation test needs the queried points' own orientations. Staged, it is first run
-  // on the coarse subset only, and kept for the fine stage only if it rejected enough of the
-  // coarse pairs (`orientation_min_rejected`): on clean scans it removes next to nothing, and
-  // the source's PCA normals over the whole sample were most of its cost. A source with given
-  // normals (stereo) pays nothing for the test and gets no coarse stage from it: coarse to fine
-  // moved each stereo frame's stopping point by up to 0.05° and raised the default simulated
-  // stereo replay's ATE from 1.05 to 1.60 cm (three other seeds: −0.8 to +0.01 cm). A stage of
-  // 10 iterations on every 5th point took a fifth off KITTI's registration time at the same
-  // accuracy over 51 frames, but broke a frame of a 0.8°/m seed on 20 of them and ran the
-  // simulated cloud traverse (given normals) to the iteration limit twice: not adopted.
-  // Dropped, it also thins the fine stage (clean_sample_step): pairs the coarse stage found
-  // clean give the same accuracy from a quarter of the sample, and the fine queries and the
-  // target normals they need were most of what was left.
-  // Coarse to fine (§4.5) pays where queries are many; a coarse subset of a few dozen points
-  // (a 200-point curve: 20) makes a poor estimate and saves nothing.
-  constexpr std::size_t kMinCoarseQueries = 500;
-  const bool stage_test =
-      options.staged_orientation_test && orientation_test.enabled && source.EstimatesOrientations();
-  const bool use_coarse =
-      (options.coarse_to_fine || stage_test) && options.coarse_iterations > 0 &&
-      options.coarse_step > 1 &&
-      source_sample.size() / static_cast<std::size_t>(options.coarse_step) >= kMinCoarseQueries;
-  const bool staged_test =
-      orientation_test.enabled && use_coarse && options.staged_orientation_test;
-  auto require_queried = [&](std::size_t step) {
-    const std::vector<std::size_t> s = step > 1 ? EveryKth(source_sample, step) : source_sample;
-    const std::vector<std::size_t> t = step > 1 ? EveryKth(target_sample, step) : target_sample;
-    source.RequireOrientations(s);
-    target.RequireOrientations(t);
-    orientation_test.spread_cap = MedianSpread(source, s, target, t);
-  };
-  if (orientation_test.enabled)
-    require_queried(staged_test ? static_cast<std::size_t>(options.coarse_step) : 1);
-  double coarse_rejected_fraction = 0.0;  // of the pairs found, in the last coarse iteration
-
-  Eigen::Isometry3d T = T_init;
-  std::vector<QueryMemo> forward_memos(source.cloud().size());
-  std::vector<QueryMemo> backward_memos(symmetric ? target.cloud().size() : 0);
-  std::vector<Match> matches;
-  std::vector<double> distances, weights;
-  std::vector<WeightedPair> pairs;
+  if (!CheckInputs(source, target, options, &result)) return result;
+  MatchingLoop loop(source, target, options, T_init);
+  if (!loop.Prepare(&result)) return result;  // D, the initial Dmax and the sample (§4.3)
   result.status = RegistrationStatus::kMaxIterations;
-
-  // Anderson acceleration state: the plain iterate behind an extrapolated T (the fallback),
-  // and the previous pose's distances for the energy safeguard.
-  const bool accelerate = options.acceleration == Acceleration::kAnderson ||
-                          (options.acceleration == Acceleration::kAuto &&
-                           EffectiveResidual(options) == Residual::kPointToPoint);
-  AndersonAccelerator anderson(accelerate ? options.anderson_depth : 0);
-  bool extrapolated = false;  // T is an extrapolation the safeguard has not checked yet
-  Eigen::Isometry3d T_plain = T;
-  std::vector<double> previous_distances;
-  std::size_t previous_queries = 0, previous_step = 0;
-
-  constexpr std::size_t kCycleMemory = 8;  // iterates a cycle may span (see the stopping test)
-  std::vector<Eigen::Isometry3d> recent;
   for (int it = 1; it <= options.max_iterations; ++it) {
-    const bool coarse = use_coarse && it <= options.coarse_iterations;
-    const std::size_t step = coarse ? static_cast<std::size_t>(options.coarse_step) : 1;
-    if (step != previous_step) {
-      // A new query set is a new objective: no history, no unverified extrapolation.
-      anderson.Reset();
-      if (extrapolated) T = T_plain;
-      extrapolated = false;
-      if (staged_test && !coarse && orientation_test.enabled) {
-        if (coarse_rejected_fraction < options.orientation_min_rejected) {
-          orientation_test.enabled = false;
-          if (options.clean_sample_step > 1) {
-            const auto clean_step = static_cast<std::size_t>(options.clean_sample_step);
-            source_sample = EveryKth(source_sample, clean_step);
-            target_sample = EveryKth(target_sample, clean_step);
-            result.sample_points = source_sample.size();
-          }
-        } else {
-          require_queried(1);
-        }
-      }
-    }
-
-    // a. Closest points within Dmax, both ways for the symmetric criterion.
-    std::size_t orientation_rejected = 0, searches = 0;
-    auto match = [&] {
-      matches.clear();
-      orientation_rejected =
-          MatchDirection(source, target, T, dmax, spread, orientation_test, source_sample, step,
-                         false, need_orientations,
-                         options.reuse_closest_points, &forward_memos, &matches, &searches);
-      std::size_t n = (source_sample.size() + step - 1) / step;
-      if (symmetric) {
-        orientation_rejected +=
-            MatchDirection(target, source, T.inverse(), dmax, spread, orientation_test,
-                           target_sample, step, true, need_orientations,
-                           options.reuse_closest_points, &backward_memos, &matches,
-                           &searches);
-        n += (target_sample.size() + step - 1) / step;
-      }
-      distances.clear();
-      for (const Match& m : matches) distances.push_back(m.distance);
-      return n;
-    };
-    const std::size_t queries = match();
-    // Safeguard: an extrapolated pose must not raise the energy over the previous pose's at
-    // the current bound; otherwise take the plain iterate and forget the history.
-    bool rejected = false;
-    if (extrapolated && TruncatedEnergy(distances, queries, dmax) >
-                            TruncatedEnergy(previous_distances, previous_queries, dmax)) {
-      T = T_plain;
-      anderson.Reset();
-      rejected = true;
-      match();
-    }
-    const bool accelerated = extrapolated && !rejected;
-    extrapolated = false;                            // T is checked now (or plain)
-    if (accelerate) previous_distances = distances;  // only the safeguard reads them
-    previous_queries = queries;
-    previous_step = step;
-
+    const bool coarse = loop.Coarse(it);
+    loop.BeginStage(coarse, &result);
+    // a. Closest points within Dmax, both ways for the symmetric criterion (§4.1, §4.2).
+    IterationTrace trace = loop.MatchClosestPoints(it, coarse);
     // b, c. Statistics of the distances and the new Dmax.
-    const DmaxUpdate update =
-        UpdateDmax(distances, d_ref, dmax, options.histogram_bins, options.histogram_valley_ratio);
-    dmax = update.dmax_m;
-
+    loop.AdaptDmax(&trace);
     // d. Discard pairs beyond Dmax, or outside the Mahalanobis gate (§4.4); weights.
-    KeepWithinGate(source, target, T, dmax, sampling_variance, spread, options, &matches, &weights);
-    const std::size_t kept = matches.size();
-    std::size_t forward = 0;
-    for (const Match& m : matches) forward += !m.backward;
-    const std::size_t backward = kept - forward;
-    double sum_sq = 0.0;
-    for (std::size_t k = 0; k < kept; ++k) {
-      const Match& m = matches[k];
-      sum_sq += m.distance * m.distance;
-      // Symmetric: each direction's term normalised by its own pair count.
-      if (symmetric) weights[k] /= static_cast<double>(m.backward ? backward : forward);
-    }
-
-    IterationTrace trace;
-    trace.iteration = it;
-    trace.queries = rejected ? 2 * queries : queries;  // a rejected extrapolation matched twice
-    trace.searches = searches;
-    trace.pairs_found = distances.size();
-    trace.pairs_rejected_by_orientation = orientation_rejected;
-    if (coarse)
-      coarse_rejected_fraction =
-          static_cast<double>(orientation_rejected) /
-          static_cast<double>(std::max<std::size_t>(1, orientation_rejected + distances.size()));
-    trace.pairs_kept = kept;
-    trace.mean_m = update.mean_m;
-    trace.stddev_m = update.stddev_m;
-    trace.dmax_m = dmax;
-    trace.branch = update.branch;
-    trace.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
-    trace.accelerated = accelerated;
-    trace.extrapolation_rejected = rejected;
-
+    const std::size_t kept = loop.GatePairs(&trace);
     if (kept < static_cast<std::size_t>(std::max(3, options.min_pairs))) {
       result.trace.push_back(trace);
       result.status = RegistrationStatus::kTooFewPairs;
       result.message = "only " + std::to_string(kept) +
-                       " pairs within Dmax = " + std::to_string(dmax) + " m at iteration " +
+                       " pairs within Dmax = " + std::to_string(loop.dmax()) + " m at iteration " +
                        std::to_string(it);
       break;
     }
-
     // e. Least-squares motion from the ORIGINAL source points (replaces T, §4.3 step 3e).
-    Eigen::Isometry3d T_new = T;
-    bool solved = false;
-    if (EffectiveResidual(options) == Residual::kPointToPlane) {
-      solved = PointToPlaneStep(source, target, matches, weights, &T_new);
-    } else {
-      pairs.clear();
-      for (std::size_t k = 0; k < kept; ++k)
-        pairs.push_back({source.cloud().points[matches[k].source_index],
-                         target.cloud().points[matches[k].target_index], weights[k]});
-      const MotionEstimate est = options.solver == Solver::kDualQuaternion
-                                     ? SolveMotionDualQuaternion(pairs)
-                                     : SolveMotionSvd(pairs);
-      solved = est.valid;
-      T_new = est.T_target_source;
-    }
-    if (!solved) {
+    Eigen::Isometry3d T_new;
+    if (!loop.SolveMotion(&T_new)) {
       result.trace.push_back(trace);
       result.status = RegistrationStatus::kSolverFailed;
       result.message = "motion solve failed at iteration " + std::to_string(it);
       break;
     }
-
-    // f. Stopping test (on the plain step: it is the fixed-point residual).
-    const Eigen::Isometry3d T_prev = T;
-    trace.step_translation_m = (T_new.translation() - T.translation()).norm();
-    trace.step_rotation_deg =
-        Eigen::AngleAxisd(T_new.linear() * T.linear().transpose()).angle() * kRadToDeg;
-    result.trace.push_back(trace);
-    const bool small_step =
-        options.convergence == Convergence::kRelative
-            ? RelativeConverged(T, T_new, options.relative_tolerance, d_ref * 1e-4)
-            : trace.step_translation_m < translation_tol &&
-                  trace.step_rotation_deg < options.rotation_tolerance_deg;
-    // A cycle: the pairs flip between a few sets and the plain iterate comes back to within the
-    // stopping tolerances of one of the last few (seen on stereo frames: period 2 to 7, steps of
-    // 0.005° that never went below the rotation tolerance, so every such frame ran to
-    // max_iterations). The estimate cannot get better than that; stop.
-    bool cycling = false;
-    if (options.convergence == Convergence::kAbsolute && !small_step) {
-      for (const Eigen::Isometry3d& earlier : recent) {
-        cycling |=
-            (T_new.translation() - earlier.translation()).norm() < translation_tol &&
-            Eigen::AngleAxisd(T_new.linear() * earlier.linear().transpose()).angle() * kRadToDeg <
-                options.rotation_tolerance_deg;
-      }
-    }
-    // What is left of the seed's uncertainty is at most a few times this step: the gate closes
-    // as the estimate settles, and is the sensor's alone once it has.
-    spread.rotation_var_rad2 =
-        std::min(spread.rotation_var_rad2,
-                 std::pow(kSeedGateStepFactor * trace.step_rotation_deg * kDegToRad, 2));
-    spread.translation_var_m2 = std::min(
-        spread.translation_var_m2, std::pow(kSeedGateStepFactor * trace.step_translation_m, 2));
-    if (recent.size() == kCycleMemory) recent.erase(recent.begin());
-    recent.push_back(T);  // the iterate before this one: comparing with it is the step test
-    T = T_new;
-    result.iterations = it;
-    // In the coarse stage a small step only means the subset has settled: go on to all points.
-    if ((small_step || cycling) && !coarse) {
+    // f. Stopping test on the plain step, then the extrapolation from it.
+    if (loop.Settle(T_new, coarse, &trace, &result)) {
       result.status = RegistrationStatus::kConverged;
       break;
     }
-    // Extrapolate from the plain step (checked at the next matching).
-    const AndersonAccelerator::Vector6 g = PoseParameters(T_new);
-    const AndersonAccelerator::Vector6 next = anderson.Next(PoseParameters(T_prev), g);
-    extrapolated = next != g;
-    if (extrapolated) {
-      T_plain = T_new;
-      T = PoseFromParameters(next);
-    }
+    loop.Extrapolate();
   }
-  // The loop may end on an extrapolation nobody checked: keep the plain iterate.
-  if (extrapolated) T = T_plain;
-
-  result.converged = result.status == RegistrationStatus::kConverged;
-  result.T_target_source = T;
-  result.dmax_m = dmax;
-
-  // Final pairs at the final estimate: inliers, RMS, information.
-  matches.clear();
-  MatchDirection(source, target, T, dmax, PoseSpread(), orientation_test, source_sample, 1, false,
-                 need_orientations,
-                         options.reuse_closest_points, &forward_memos, &matches, nullptr);
-  KeepWithinGate(source, target, T, dmax, sampling_variance, PoseSpread(), options, &matches,
-                 &weights);
-  const std::size_t kept = matches.size();
-  double sum_sq = 0.0;
-  for (const Match& m : matches) sum_sq += m.distance * m.distance;
-  result.inliers = kept;
-  result.inlier_ratio = source_sample.empty()
-                            ? 0.0
-                            : static_cast<double>(kept) / static_cast<double>(source_sample.size());
-  result.rms_m = kept > 0 ? std::sqrt(sum_sq / static_cast<double>(kept)) : 0.0;
-  ComputeInformation(source, target, matches, T, sampling_variance, options, &result);
+  loop.Finish(&result);  // final pairs at the final estimate: inliers, RMS, information
   return result;
 }
 

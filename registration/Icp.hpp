@@ -77,7 +77,7 @@ const char* ToString(RegistrationStatus status);
 /// One iteration of the loop (Zhang 1994, §4.3 step 3).
 struct IterationTrace {
   int iteration = 0;
-  std::size_t queries = 0;      ///< closest-point queries (sampled points used, both ways)
+  std::size_t queries = 0;  ///< closest-point queries (sampled points used, both ways)
   /// k-d tree searches those queries ran: a query point that moved less than half the gap to
   /// its second closest point since its last search keeps its closest point without one
   std::size_t searches = 0;

@@ -516,7 +516,7 @@ TEST(Icp, ReusedClosestPointsGiveTheSameRegistration) {
     EXPECT_TRUE(reused.information == searched.information) << c.name;
     EXPECT_EQ(reused.trace.front().searches, reused.trace.front().queries) << c.name;
     const IterationTrace& last = reused.trace.back();
-    EXPECT_LT(last.searches, last.queries / 2) << c.name << ": " << last.searches << " of "
-                                               << last.queries;
+    EXPECT_LT(last.searches, last.queries / 2)
+        << c.name << ": " << last.searches << " of " << last.queries;
   }
 }

@@ -238,9 +238,8 @@ TEST(KdTree, OthersBoundMatchesBruteForce) {
           if (expected.found && i == expected.index) continue;
           second_sq = std::min(second_sq, d);
         }
-        for (const std::size_t hint :
-             {std::numeric_limits<std::size_t>::max(), expected.index,
-              static_cast<std::size_t>(q) % pts->size()}) {
+        for (const std::size_t hint : {std::numeric_limits<std::size_t>::max(), expected.index,
+                                       static_cast<std::size_t>(q) % pts->size()}) {
           double others_sq = -1.0;
           const Neighbor got = tree.FindClosest(query, bound, hint, &others_sq);
           ASSERT_EQ(got.found, expected.found) << "bound " << bound;
