@@ -82,7 +82,7 @@ struct ElevationMapOptions {
   /// matches each pixel over a window of its neighbours, and all share the frame's pose): true
   /// makes them weigh together as one measurement (each one's Kalman update uses its variance ×
   /// the frame's point count in that cell; the gate its own variance). false counts every point
-  /// as independent, which made the published σ 5× too small (README "The maps").
+  /// as independent, which made the published σ 5× too small (docs/maps.md, "The published σ").
   bool frame_points_correlated = true;
   /// With normals (FrameContext::normals), a point's height variance is that of its distance to
   /// the surface along the vertical at the cell centre: nᵀΣn / n_z² (its error across the
@@ -133,8 +133,8 @@ struct CellCandidate {
 };
 
 /// One cell as stored: the primary's layers, then the candidate. 44 bytes, no
-/// padding; README "The maps" gives its fusion speed against the 32-byte one-hypothesis record
-/// and a 48-byte aligned one.
+/// padding; docs/maps.md ("Memory and speed") gives its fusion speed against the 32-byte
+/// one-hypothesis record and a 48-byte aligned one.
 struct CellRecord {
   CellValue value;
   CellCandidate candidate;

@@ -64,8 +64,8 @@ struct StereoOptions {
   /// points every fill_spacing_m for the DEM only (StereoPointsResult::fill; registration and
   /// the OctoMap do not see them). Far ground is sampled more coarsely than the DEM's cells
   /// along the view, and pixel locking bunches the rows' depths, so without them one frame
-  /// covers the cells in stripes of constant range (README "Correlation stereo"). 0 = off;
-  /// keep it below dem.cell_size_m.
+  /// covers the cells in stripes of constant range (docs/stereo.md, "DEM fill between pixels"). 0 =
+  /// off; keep it below dem.cell_size_m.
   double fill_spacing_m = 0.025;
   /// DEM fill: neighbours whose disparities differ by more than this [px] are across an edge
   /// and not joined. At least a whole pixel, the step of a pixel-locked disparity.

@@ -1,8 +1,8 @@
-// The bad-input matrix (README, "Bad input"): one test per row, each running the real
+// The bad-input matrix (docs/robustness.md, "Bad input"): one test per row, each running the real
 // `rovermap` command on a copy of bundled data broken one way, and checking the exit status
 // (docs/design.md §5), that stderr names the file (and line or key) at fault, and what is left in
 // the output: nothing, no temporary, or, for a bad frame, the full set with the frame flagged.
-// Rows are named Command_BadInput and kept in the README table's order.
+// Rows are named Command_BadInput and kept in that table's order.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -118,9 +118,10 @@ class Locked {
 
 // As root, chmod 000 denies nothing: the row then runs rovermap as nobody (setpriv, from
 // util-linux, which every Debian has), with the scratch directory handed over to it.
-#define DENY_OR_SKIP(locked)                                                                     \
-  if (!DenyAccess(locked)) GTEST_SKIP() << "chmod 000 denies nothing here and nobody is not at " \
-                                           "hand"
+#define DENY_OR_SKIP(locked)                                            \
+  if (!DenyAccess(locked))                                              \
+  GTEST_SKIP() << "chmod 000 denies nothing here and nobody is not at " \
+                  "hand"
 
 class BadInput : public rovermap::testing::ServeFixture {
  protected:

@@ -3,8 +3,8 @@
 // coarsely than the cells along the view, and SGBM's sub-pixel disparity clusters near whole pixels
 // (pixel locking), so one frame's points cover the cells in stripes of constant range; a cell is
 // published only with points of two frames (dem.min_frame_span), so the cells between the stripes
-// stayed empty: regular bands across the range direction. stereo.fill_spacing_m closes them (README
-// "Correlation stereo").
+// stayed empty: regular bands across the range direction. stereo.fill_spacing_m closes them
+// (docs/stereo.md, "DEM fill between pixels").
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -99,8 +99,8 @@ TEST_F(Bunny, Bun315ToBun000) {
   EXPECT_LT(trans, 0.001);
 }
 
-// config/presets/fast.yaml (README, "Speed"): a 3·D voxel sample and coarse to fine stay
-// within the same bounds on both pairs.
+// config/presets/fast.yaml (docs/matcher.md, "What a registration costs"): a 3·D voxel sample and
+// coarse to fine stay within the same bounds on both pairs.
 TEST_F(Bunny, FastPresetStaysWithinTheBounds) {
   const RegistrationOptions options =
       rovermap::config::LoadConfig(std::string(ROVERMAP_SOURCE_DIR) + "/config/presets/fast.yaml",
@@ -137,11 +137,11 @@ TEST_F(Bunny, FromIdentityIsOutsideTheBasin) {
       ToString(r.status), r.iterations, r.inlier_ratio, 1e3 * r.rms_m);
 }
 
-// The staged orientation test (README, "Speed"): on the clean scans it rejects a fifth of the
-// pairs in the first coarse iteration (10° off) and next to none by the last (measured 0.3 %
-// and 0.2 %, below orientation_min_rejected 0.6 %), so the fine stage runs without it and the
-// source gets normals for the coarse subset only (1500 of the 15 000 sampled points), at the
-// accuracy of the test kept on throughout.
+// The staged orientation test (docs/matcher.md, "What a registration costs"): on the clean scans it
+// rejects a fifth of the pairs in the first coarse iteration (10° off) and next to none by the last
+// (measured 0.3 % and 0.2 %, below orientation_min_rejected 0.6 %), so the fine stage runs without
+// it and the source gets normals for the coarse subset only (1500 of the 15 000 sampled points), at
+// the accuracy of the test kept on throughout.
 TEST_F(Bunny, OrientationTestIsDroppedOnCleanScansAfterTheCoarseStage) {
   const Eigen::Isometry3d truth = GroundTruth("bun045.ply", "bun000.ply");
   const Eigen::Isometry3d init = Perturb(truth, 10.0, 0.005);

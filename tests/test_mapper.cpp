@@ -156,7 +156,7 @@ TEST(Mapper, SimulatedStereoTraverse) {
   // With the seed gate (step 3 of the recipe, docs/design.md §1) and the DEM fill between
   // stereo pixels: 0.0064 m, DEM 8486 cells, RMSE 1.44 cm, p95 3.34 cm, 0.867 within 2σ. The
   // trajectory is better, its attitude not: the gate lets the registration's own roll and pitch
-  // noise through where the narrow gate had held the simulator's exact ones (README, "Known
+  // noise through where the narrow gate had held the simulator's exact ones (docs/replay.md, "Known
   // limits").
   EXPECT_LT(t.drift_ratio, 0.55);
   EXPECT_GT(t.dem.cells, 8000u);

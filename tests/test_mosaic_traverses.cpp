@@ -248,7 +248,7 @@ TEST_F(MosaicTraverses, AReturnTraverseOnASmallOverlapIsCorrectedWithoutATilt) {
   EXPECT_LT(c_on.rmse_m, best_single);
   EXPECT_LE(c_on.rmse_m, c_off.rmse_m);
   // 0.88 with the seed gate (mapper.seed_gate_scale) in the traverses' replays: the DEMs' σ is
-  // still optimistic (README, "Known limits").
+  // still optimistic (docs/mosaic.md).
   EXPECT_GT(c_on.within_2sigma, 0.85);
 }
 

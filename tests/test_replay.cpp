@@ -314,7 +314,7 @@ TEST_F(Replay, DemAgreesWithTheTrueTerrainTif) {
   ASSERT_EQ(c.status, rovermap::eval::DemStatus::kOk) << c.message;
   // Measured: 11 447 cells, RMSE 2.3 cm, p95 5.7 cm, max 15.0 cm, within 2σ 0.876 (0.61 when a
   // frame's points in a cell counted as independent, without the slope-aware variance and the
-  // attitude floor: README, "Known limits").
+  // attitude floor: docs/replay.md, "Known limits").
   EXPECT_GT(c.cells, 10000u);
   EXPECT_LT(c.rmse_m, 0.035);
   EXPECT_LT(c.p95_abs_m, 0.075);

@@ -108,7 +108,7 @@ TEST(StereoMiddlebury, PfmGroundTruthReadsTheRightWayUp) {
   const Motorcycle m = LoadMotorcycle();
   ASSERT_EQ(m.gt.type(), CV_32F);
   ASSERT_EQ(m.gt.size(), m.left.size());
-  // The README's range; a flipped or mis-scaled read would break the bad-pixel rate anyway.
+  // The dataset README's range; a flipped or mis-scaled read would break the bad-pixel rate anyway.
   double lo = 1e9, hi = 0;
   for (int v = 0; v < m.gt.rows; ++v)
     for (int u = 0; u < m.gt.cols; ++u)
@@ -194,7 +194,7 @@ TEST(StereoMiddlebury, MotorcycleMetricDepth) {
   EXPECT_LT(median(abs_error), 0.010);
   EXPECT_LT(p90(abs_error), 0.040);
 
-  // The point path gives the same depths (doffs handled), in the range the README gives.
+  // The point path gives the same depths (doffs handled), in the range the dataset README gives.
   StereoCamera camera{kF, kF, kCx, kCy, kBaselineM, kDoffs};
   StereoOptions po = o;
   po.compute_normals = false;

@@ -1,7 +1,8 @@
-// Faults while writing (README "Robustness"): a full disk or a file-size limit during any output
-// is reported naming the file (exit status 1, docs/design.md §5), the previous version of that
-// file stays byte for byte, and no temporary is left. The fault is RLIMIT_FSIZE in a child
-// process: past the limit write() fails with EFBIG, as on a full disk, and no root is needed.
+// Faults while writing (docs/robustness.md, "Faults while writing"): a full disk or a file-size
+// limit during any output is reported naming the file (exit status 1, docs/design.md §5), the
+// previous version of that file stays byte for byte, and no temporary is left. The fault is
+// RLIMIT_FSIZE in a child process: past the limit write() fails with EFBIG, as on a full disk, and
+// no root is needed.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
@@ -445,7 +446,7 @@ TEST_F(MosaicFault, ReportFullKeepsThePreviousMosaicAndReport) {
   ExpectFailsKeepingThePrevious(inputs, (cog + report) / 2, "mosaic.json");
 }
 
-// --- `rovermap serve`: it stops, exit 1 naming the file (README, serve); a restart loses
+// --- `rovermap serve`: it stops, exit 1 naming the file (docs/serve.md); a restart loses
 // nothing. ---
 
 class ServeFault : public WriteFaults {
