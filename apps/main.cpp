@@ -24,12 +24,11 @@ int main(int argc, char** argv) {
   std::signal(SIGXFSZ, SIG_IGN);
   // OpenMP threads that finish a parallel loop first spin for the others by default; on a shared
   // 2-core machine (a rover's computer runs more than the mapper) the spinning thread takes the
-  // core its partner needs: a loaded machine replayed the simulated cloud traverse at 8 frames/s
-  // spinning, 13 passive. libgomp reads OMP_WAIT_POLICY when it is loaded, before main, so the
-  // default is set by running this program again with it (once; a user's setting is kept).
-  // Only for the commands that run many frames: loading the program's libraries (GDAL's alone
-  // are over a hundred) costs about 65 ms, which a one-shot `register` or `eval` paid twice
-  // (134 ms against 71 ms before its first line of work), while spinning costs them nothing.
+  // core its partner needs (docs/replay.md, "Threads"). libgomp reads OMP_WAIT_POLICY when it is
+  // loaded, before main, so the default is set by running this program again with it (once; a
+  // user's setting is kept). Only for the commands that run many frames: loading the program's
+  // libraries again (GDAL's alone are over a hundred) would cost a one-shot command more than
+  // spinning does.
   if (std::getenv("OMP_WAIT_POLICY") == nullptr && RunsManyFrames(argc, argv)) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are

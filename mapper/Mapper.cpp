@@ -403,8 +403,10 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   const auto dem_start = Clock::now();
   const Eigen::Isometry3d& T = step.T_world_body;
   std::vector<Eigen::Vector3d> points_world;
-  std::vector<Eigen::Matrix3d> covariances;
-  std::vector<Eigen::Vector3d> normals;  // body frame, as the covariances
+  std::vector<Eigen::Matrix3d>& covariances = fuse_covariances_;
+  std::vector<Eigen::Vector3d>& normals = fuse_normals_;  // body frame, as the covariances
+  covariances.clear();
+  normals.clear();
   // Sized once for the measured points and the fill (growing them copied every covariance).
   const std::size_t capacity = cloud.size() + fill.size();
   points_world.reserve(capacity);
