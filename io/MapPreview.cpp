@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -12,6 +11,7 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/TickLabel.hpp"
 
 namespace rovermap::io {
 namespace {
@@ -26,14 +26,6 @@ double NiceBelow(double value) {
     if (m * p <= value) return m * p;
   }
   return p;
-}
-
-std::string Format(double value, double step) {
-  char buffer[32];
-  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step)));
-  if (std::abs(value) < 1e-6 * step) value = 0.0;  // no "-0.0"
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
-  return buffer;
 }
 
 }  // namespace
@@ -240,18 +232,18 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   for (double v = std::ceil(z_min / tick) * tick; v <= z_max + 1e-9; v += tick) {
     const int y = bar_top + static_cast<int>((z_max - v) / range * (bar_h - 1));
     cv::line(canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kText, 1);
-    cv::putText(canvas, Format(v, tick), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                kText, 1, cv::LINE_AA);
+    cv::putText(canvas, TickLabel(v, tick), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX,
+                0.45, kText, 1, cv::LINE_AA);
   }
   cv::putText(canvas, "m", {bar_x, bar_top + bar_h + 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
               cv::LINE_AA);
   // Heights beyond the bar's range: the extreme, at the end it is clipped to.
   if (clipped_high) {
-    cv::putText(canvas, "max " + Format(z_highest, tick), {bar_x - 4, bar_top - 6},
+    cv::putText(canvas, "max " + TickLabel(z_highest, tick), {bar_x - 4, bar_top - 6},
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
   }
   if (clipped_low) {
-    cv::putText(canvas, "min " + Format(z_lowest, tick), {bar_x - 4, bar_top + bar_h + 30},
+    cv::putText(canvas, "min " + TickLabel(z_lowest, tick), {bar_x - 4, bar_top + bar_h + 30},
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
   }
 
@@ -259,7 +251,7 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   const int bar_px = static_cast<int>(std::lround(bar_m * px_per_m));
   const int sy = canvas.rows - bottom + 10;
   cv::rectangle(canvas, cv::Rect(margin, sy - 5, bar_px, 6), kText, cv::FILLED);
-  cv::putText(canvas, Format(bar_m, bar_m) + " m", {margin + bar_px + 8, sy + 2},
+  cv::putText(canvas, TickLabel(bar_m, bar_m) + " m", {margin + bar_px + 8, sy + 2},
               cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
   const int nx = margin + map_image.cols - 10;
   cv::arrowedLine(canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
