@@ -1,5 +1,5 @@
 // `rovermap mosaic DEM.tif ... --out MOSAIC.tif`: dem.tif files fused into one COG on a common
-// grid, with mosaic.json beside it; a thin layer over mosaic/.
+// grid, with its report MOSAIC.json beside it; a thin layer over mosaic/.
 #include <unistd.h>
 
 #include <cerrno>
@@ -19,11 +19,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// --out's folder must exist and be writable (checked before any work); the file (and
-// mosaic.json beside it) may exist only with --force.
+// --out's folder must exist and be writable (checked before any work); the file (and its
+// report beside it) may exist only with --force.
 void CheckOutputFile(const fs::path& out, const fs::path& report, bool force) {
   std::error_code error;
   if (fs::is_directory(out, error)) throw UsageError("--out " + out.string() + ": a directory");
+  if (report == out) {
+    throw UsageError("--out " + out.string() +
+                     ": the report takes the output's name with .json; name the output .tif");
+  }
   const fs::path parent = out.parent_path().empty() ? fs::path(".") : out.parent_path();
   if (!fs::is_directory(parent, error)) {
     throw UsageError("--out " + out.string() + ": no folder " + parent.string());
@@ -49,8 +53,10 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args) {
       "co-registered COG mosaic on a common grid");
   cmd->add_option("dems", args->inputs, "Input DEM GeoTIFFs (dem.tif of replay, or mosaics)")
       ->required();
-  cmd->add_option("--out", args->out, "Output COG (mosaic.json is written beside it)")->required();
-  cmd->add_flag("--force", args->force, "Replace an existing output and mosaic.json");
+  cmd->add_option("--out", args->out,
+                  "Output COG NAME.tif (its report NAME.json is written beside it)")
+      ->required();
+  cmd->add_flag("--force", args->force, "Replace an existing output and its report");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
       "Bands: 1 elevation (m), 2 sigma (m), 3 summed point count, 4 inputs disagreeing beyond\n"
@@ -59,7 +65,7 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args) {
       "mosaic.min_overlap_cells, mosaic.min_information, mosaic.min_improvement,\n"
       "mosaic.max_correction_m, mosaic.max_correction_deg (and registration.* for "
       "co-registration).\n"
-      "Prints mosaic.json on stdout.\n"
+      "Prints the report (NAME.json beside NAME.tif) on stdout.\n"
       "Exit status: 0 written, 1 bad or missing input file or cannot write, 2 usage or config\n"
       "error.\n");
   return cmd;
@@ -68,7 +74,7 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args) {
 int RunMosaic(const MosaicArgs& args) {
   const config::Config cfg = LoadConfigArgs(args.config);
   const fs::path out(args.out);
-  const fs::path report = out.parent_path() / "mosaic.json";
+  const fs::path report = mosaic::MosaicReportPath(out);
   CheckOutputFile(out, report, args.force);
   std::vector<fs::path> inputs(args.inputs.begin(), args.inputs.end());
   mosaic::MosaicResult result;

@@ -59,6 +59,7 @@ class CampaignLayout {
   std::filesystem::path MosaicPlan() const { return dir_ / "work" / "mosaic-plan.json"; }
   std::filesystem::path MosaicPart(int part) const;
   std::filesystem::path Mosaic() const { return dir_ / "mosaic.tif"; }
+  /// Named after the mosaic, as `rovermap mosaic` names it (mosaic::MosaicReportPath).
   std::filesystem::path MosaicReport() const { return dir_ / "mosaic.json"; }
   std::filesystem::path Summary() const { return dir_ / "summary.json"; }
   std::filesystem::path SlurmDir() const { return dir_ / "slurm"; }

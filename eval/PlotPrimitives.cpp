@@ -8,6 +8,7 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/TickLabel.hpp"
 
 namespace rovermap::eval::plot {
 
@@ -18,14 +19,6 @@ namespace {
 // Estimate colours (BGR): orange, blue, green, red, purple, brown.
 const cv::Scalar kPalette[] = {{20, 120, 240}, {200, 110, 30}, {60, 160, 40},
                                {40, 40, 210},  {160, 60, 150}, {40, 90, 140}};
-
-// A tick value with as many decimals as the step needs ("1000", "0.25").
-std::string TickLabel(double value, double step) {
-  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(decimals) << (std::abs(value) < 1e-9 * step ? 0.0 : value);
-  return s.str();
-}
 
 // Legend geometry [px]: one row per entry; the box starts above the first row's line and ends
 // below the last row's text; panels place the first row 20 px below their top.
@@ -62,13 +55,13 @@ void DrawAxes(cv::Mat& img, const Axes& a, const std::string& x_label, const std
   for (double x = std::ceil(a.x0 / x_step) * x_step; x <= a.x1 + 1e-9 * x_step; x += x_step) {
     const cv::Point p = a.Map(x, a.y0);
     cv::line(img, p, p + cv::Point(0, 5), kBlack, 1);
-    cv::putText(img, TickLabel(x, x_step), p + cv::Point(-14, 22), kFont, 0.45, kBlack, 1,
+    cv::putText(img, io::TickLabel(x, x_step), p + cv::Point(-14, 22), kFont, 0.45, kBlack, 1,
                 cv::LINE_AA);
   }
   for (double y = std::ceil(a.y0 / y_step) * y_step; y <= a.y1 + 1e-9 * y_step; y += y_step) {
     const cv::Point p = a.Map(a.x0, y);
     cv::line(img, p, p - cv::Point(5, 0), kBlack, 1);
-    cv::putText(img, TickLabel(y, y_step), p + cv::Point(-60, 5), kFont, 0.45, kBlack, 1,
+    cv::putText(img, io::TickLabel(y, y_step), p + cv::Point(-60, 5), kFont, 0.45, kBlack, 1,
                 cv::LINE_AA);
   }
   cv::putText(img, x_label, {a.area.x + a.area.width / 2 - 40, a.area.y + a.area.height + 45},

@@ -618,22 +618,12 @@ std::vector<std::pair<MessageRef, MessageRef>> PairImages(const std::vector<Mess
   return pairs;
 }
 
-}  // namespace
-
-BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
-    : bag_(std::make_unique<Bag>()) {
-  bag_->file = bag_file;
-  bag_->options = options;
-  const std::string name = bag_file.string();
-  const BagOptions& o = options;
-  const bool stereo = o.sensor_type == SensorType::kStereo;
-  std::error_code error;
-  if (!fs::is_regular_file(bag_file, error)) throw IoError(name + ": no such bag file");
-
-  Contents c;
+// Opens `bag` and reads the contents `o` asks for in one pass. @throw IoError naming `name` if
+// the bag cannot be read (unindexed, truncated, not a ROS 1 bag) or lacks a topic `o` needs.
+Contents OpenAndRead(rosbag::Bag& bag, const BagOptions& o, const std::string& name) {
   try {
     try {
-      bag_->bag.open(name, rosbag::bagmode::Read);
+      bag.open(name, rosbag::bagmode::Read);
     } catch (const rosbag::BagUnindexedException&) {
       throw IoError(name +
                     ": the bag is not indexed (its recording was cut off or not closed): "
@@ -642,15 +632,20 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
       throw IoError(name + ": cannot read the bag, truncated or not a ROS 1 bag (" + e.what() +
                     ")");
     }
-    c = ReadContents(bag_->bag, TopicsToRead(TopicTypes(bag_->bag), o, name), o, name);
+    return ReadContents(bag, TopicsToRead(TopicTypes(bag), o, name), o, name);
   } catch (const rosbag::BagException& e) {
     throw IoError(name + ": cannot read the bag (" + e.what() + ")");
   }
+}
 
+// The stereo camera of the two CameraInfo, if the bag has both. @throw IoError naming `name` if
+// a stereo bag lacks one, or the odometry or the ground truth `o` asks for is missing.
+std::optional<CameraModel> CheckContents(const Contents& c, const BagOptions& o,
+                                         const std::string& name) {
   std::optional<CameraModel> camera;
   if (c.left_info && c.right_info) {
     camera = StereoCamera(*c.left_info, *c.right_info, name, o);
-  } else if (stereo) {
+  } else if (o.sensor_type == SensorType::kStereo) {
     throw IoError(name + ": no sensor_msgs/CameraInfo on " +
                   (c.left_info ? o.right_info_topic : o.left_info_topic));
   }
@@ -661,30 +656,44 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
                   o.odometry_child_frame + " (/tf has: " + (seen.empty() ? "nothing" : seen) + ")");
   }
   if (c.odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
-  const bool has_truth = !o.groundtruth_topic.empty();
-  if (has_truth && c.truth.empty()) {
+  if (!o.groundtruth_topic.empty() && c.truth.empty()) {
     throw IoError(name + ": no ground truth pose on " + o.groundtruth_topic);
   }
+  return camera;
+}
 
-  // Frames: pairs or clouds with a pose from each trajectory without extrapolating.
+// The frames of a bag: each one's messages, its dead-reckoning pose and ground truth.
+struct FramePlan {
+  std::vector<std::pair<MessageRef, MessageRef>> messages;
+  std::vector<StampedPose> odometry;
+  std::vector<StampedPose> groundtruth;  // empty, or one per frame
+  SkippedFrames skipped;
+};
+
+// Frames: pairs or clouds with a pose from each trajectory without extrapolating.
+// @throw IoError naming `name` if no frame has both.
+FramePlan PlanFrames(const Contents& c, const BagOptions& o, const std::string& name) {
+  const bool stereo = o.sensor_type == SensorType::kStereo;
+  const bool has_truth = !o.groundtruth_topic.empty();
+  FramePlan plan;
   std::vector<std::pair<MessageRef, MessageRef>> candidates;
   if (stereo) {
     candidates = PairImages(c.lefts, c.rights, o.pair_tolerance_s);
-    skipped_.unpaired_images = c.lefts.size() + c.rights.size() - 2 * candidates.size();
+    plan.skipped.unpaired_images = c.lefts.size() + c.rights.size() - 2 * candidates.size();
   } else {
     for (const MessageRef& cloud : c.lefts) candidates.emplace_back(cloud, cloud);
   }
   for (const auto& candidate : candidates) {
     const double t = candidate.first.stamp.toSec();
     if (!Covers(c.odom, t) || (has_truth && !Covers(c.truth, t))) {
-      ++skipped_.outside_pose_span;
+      ++plan.skipped.outside_pose_span;
       continue;
     }
-    bag_->frames.push_back(candidate);
-    odometry_.push_back({t, Interpolate(c.odom, t), 0});
-    if (has_truth) groundtruth_.push_back({t, Interpolate(c.truth, t), 0});
+    plan.messages.push_back(candidate);
+    plan.odometry.push_back({t, Interpolate(c.odom, t), 0});
+    if (has_truth) plan.groundtruth.push_back({t, Interpolate(c.truth, t), 0});
   }
-  if (odometry_.empty()) {
+  if (plan.odometry.empty()) {
     const std::string what =
         stereo ? "left/right image pair within " + std::to_string(o.pair_tolerance_s) +
                      " s of each other (" + o.left_image_topic + ", " + o.right_image_topic + ")"
@@ -692,29 +701,57 @@ BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
     throw IoError(name + ": no " + what + " within the time span of the odometry" +
                   (has_truth ? " and the ground truth" : ""));
   }
+  return plan;
+}
 
-  info_.directory = bag_file;
-  info_.sensor_type = o.sensor_type;
-  info_.camera = camera;
+// The sequence's description: sensor, camera, T_body_sensor, origin and frame rate.
+// @throw IoError naming `name` if /tf_static does not connect the body to the sensor.
+SequenceInfo Describe(const std::filesystem::path& bag_file, const Contents& c, const BagOptions& o,
+                      const std::optional<CameraModel>& camera,
+                      const std::vector<StampedPose>& odometry) {
+  SequenceInfo info;
+  info.directory = bag_file;
+  info.sensor_type = o.sensor_type;
+  info.camera = camera;
   // T_body_sensor's rotation from a quaternion, the form sequence.yaml keeps: an imported
   // sequence then reads back this very rotation, and replays as the bag does.
   const QuaternionTransform T_body_sensor =
       o.T_body_sensor_from_tf_static
-          ? StaticBodySensor(c.statics, o, name)
+          ? StaticBodySensor(c.statics, o, bag_file.string())
           : QuaternionTransform{Eigen::Quaterniond(o.T_body_sensor.linear()),
                                 o.T_body_sensor.translation()};
   // Links each unit within 1e-3 can chain to a norm sequence.yaml would refuse.
   const Eigen::Quaterniond q = std::abs(T_body_sensor.q.norm() - 1.0) <= 1e-6
                                    ? T_body_sensor.q
                                    : T_body_sensor.q.normalized();
-  info_.body_sensor_quaternion = q;
-  info_.T_body_sensor.linear() = RotationFromQuaternion(q);
-  info_.T_body_sensor.translation() = T_body_sensor.t;
-  info_.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
-  info_.body = o.body;
-  const double span = odometry_.back().timestamp - odometry_.front().timestamp;
-  info_.frame_rate_hz =
-      odometry_.size() > 1 && span > 0.0 ? static_cast<double>(odometry_.size() - 1) / span : 0.0;
+  info.body_sensor_quaternion = q;
+  info.T_body_sensor.linear() = RotationFromQuaternion(q);
+  info.T_body_sensor.translation() = T_body_sensor.t;
+  info.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
+  info.body = o.body;
+  const double span = odometry.back().timestamp - odometry.front().timestamp;
+  info.frame_rate_hz =
+      odometry.size() > 1 && span > 0.0 ? static_cast<double>(odometry.size() - 1) / span : 0.0;
+  return info;
+}
+
+}  // namespace
+
+BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
+    : bag_(std::make_unique<Bag>()) {
+  bag_->file = bag_file;
+  bag_->options = options;
+  const std::string name = bag_file.string();
+  std::error_code error;
+  if (!fs::is_regular_file(bag_file, error)) throw IoError(name + ": no such bag file");
+  const Contents contents = OpenAndRead(bag_->bag, options, name);
+  const std::optional<CameraModel> camera = CheckContents(contents, options, name);
+  FramePlan plan = PlanFrames(contents, options, name);
+  bag_->frames = std::move(plan.messages);
+  odometry_ = std::move(plan.odometry);
+  groundtruth_ = std::move(plan.groundtruth);
+  skipped_ = plan.skipped;
+  info_ = Describe(bag_file, contents, options, camera, odometry_);
 }
 
 BagSource::~BagSource() = default;

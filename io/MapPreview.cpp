@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -12,6 +11,7 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/TickLabel.hpp"
 
 namespace rovermap::io {
 namespace {
@@ -28,60 +28,31 @@ double NiceBelow(double value) {
   return p;
 }
 
-std::string Format(double value, double step) {
-  char buffer[32];
-  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step)));
-  if (std::abs(value) < 1e-6 * step) value = 0.0;  // no "-0.0"
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
-  return buffer;
-}
-
-}  // namespace
-
-void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
-                     const std::vector<Eigen::Vector3d>& trajectory_world,
-                     const MapPreviewOptions& options) {
-  std::vector<PreviewTrajectory> trajectories;
-  if (!trajectory_world.empty()) trajectories.push_back({"", {255, 255, 255}, trajectory_world});
-  WriteDemPreview(path, map, trajectories, options);
-}
-
-void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
-                     const std::vector<PreviewTrajectory>& trajectories,
-                     const MapPreviewOptions& options) {
-  DemLayers layers;
+void EncodeAndWrite(const std::filesystem::path& path, const cv::Mat& image) {
+  std::vector<unsigned char> png;
+  bool ok = false;
   try {
-    layers = RasteriseDem(map);
-  } catch (const IoError& e) {
-    throw IoError(path.string() + ": " + e.what());
+    ok = cv::imencode(".png", image, png);
+  } catch (const cv::Exception& e) {
+    throw IoError(path.string() + ": cannot encode PNG (" + e.what() + ")");
   }
-  WriteDemPreview(path, layers, trajectories, options);
+  if (!ok) throw IoError(path.string() + ": cannot encode PNG");
+  WriteFileAtomically(path,
+                      std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
-void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
-                     const std::vector<PreviewTrajectory>& trajectories,
-                     const MapPreviewOptions& options) {
-  const auto encode_and_write = [&path](const cv::Mat& image) {
-    std::vector<unsigned char> png;
-    bool ok = false;
-    try {
-      ok = cv::imencode(".png", image, png);
-    } catch (const cv::Exception& e) {
-      throw IoError(path.string() + ": cannot encode PNG (" + e.what() + ")");
-    }
-    if (!ok) throw IoError(path.string() + ": cannot encode PNG");
-    WriteFileAtomically(path,
-                        std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
-  };
-  const auto no_data = [&] {
-    cv::Mat image(120, 320, CV_8UC3, kBackground);
-    cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
-    encode_and_write(image);
-  };
-  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) return no_data();
+// The map's cells and the trajectories' points on one pixel grid, decimated by `step` cells per
+// pixel (the cell nearest each pixel).
+struct PreviewGrid {
+  dem::CellIndex lo, hi;  ///< grid cells covered, inclusive
+  std::int64_t step = 1;  ///< [cells] per pixel
+  cv::Mat height;         ///< CV_32F [m], NaN where no cell; row 0 north
+};
 
-  // Raster of the map and the trajectories, decimated by `step` cells per pixel (the cell
-  // nearest each pixel).
+// The cells of the map and of the trajectories' points, and the decimation that fits them in
+// `max_map_px`; `height` sized, all NaN.
+PreviewGrid PreviewBounds(const DemLayers& layers,
+                          const std::vector<PreviewTrajectory>& trajectories, int max_map_px) {
   dem::CellBounds bounds;
   bounds.Extend(layers.min);
   bounds.Extend(layers.max);
@@ -94,53 +65,75 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                      static_cast<std::int64_t>(std::floor(g.y()))});
     }
   }
-  const dem::CellIndex lo = bounds.Min();
-  const dem::CellIndex hi = bounds.Max();
-  const std::int64_t cols_cells = hi.x - lo.x + 1;
-  const std::int64_t rows_cells = hi.y - lo.y + 1;
-  const std::int64_t step =
-      std::max<std::int64_t>(1, (std::max(cols_cells, rows_cells) + options.max_map_px - 1) /
-                                    std::max(1, options.max_map_px));
-  const int w = static_cast<int>((cols_cells + step - 1) / step);
-  const int h = static_cast<int>((rows_cells + step - 1) / step);
-  cv::Mat height(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  std::vector<float> heights;  // of the decimated pixels, for the colour range
+  PreviewGrid grid;
+  grid.lo = bounds.Min();
+  grid.hi = bounds.Max();
+  const std::int64_t cols_cells = grid.hi.x - grid.lo.x + 1;
+  const std::int64_t rows_cells = grid.hi.y - grid.lo.y + 1;
+  grid.step = std::max<std::int64_t>(
+      1, (std::max(cols_cells, rows_cells) + max_map_px - 1) / std::max(1, max_map_px));
+  const int w = static_cast<int>((cols_cells + grid.step - 1) / grid.step);
+  const int h = static_cast<int>((rows_cells + grid.step - 1) / grid.step);
+  grid.height = cv::Mat(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  return grid;
+}
+
+// Each pixel of `grid` takes the highest elevation of its cells.
+void Rasterise(const DemLayers& layers, PreviewGrid* grid) {
   for (int r = 0; r < layers.height; ++r) {
     const std::int64_t cy = layers.max.y - r;
-    const int row = static_cast<int>((hi.y - cy) / step);
+    const int row = static_cast<int>((grid->hi.y - cy) / grid->step);
     const float* z_row = layers.elevation_m.data() + static_cast<std::size_t>(r) * layers.width;
     for (int c = 0; c < layers.width; ++c) {
       const float z = z_row[c];
       if (std::isnan(z)) continue;
-      const int col = static_cast<int>((layers.min.x + c - lo.x) / step);
-      float& px = height.at<float>(row, col);
+      const int col = static_cast<int>((layers.min.x + c - grid->lo.x) / grid->step);
+      float& px = grid->height.at<float>(row, col);
       px = std::isnan(px) ? z : std::max(px, z);
     }
   }
-  for (int r = 0; r < h; ++r) {
-    for (int c = 0; c < w; ++c) {
+}
+
+// The heights the colour map spans, and the extremes beyond it.
+struct ColourRange {
+  float z_min = 0.0f, z_max = 1.0f;                ///< [m] the ends of the colour map
+  float z_lowest = 0.0f, z_highest = 0.0f;         ///< [m] the extremes of the heights
+  bool clipped_low = false, clipped_high = false;  ///< an extreme lies beyond its end
+};
+
+// The colour range spans the heights between two quantiles, not the extremes: a few wrong
+// cells (a spike at a crater rim) would otherwise squeeze the whole map into a few colours.
+// Heights beyond take the end colours; the colour bar says so. `height` has a valid pixel.
+ColourRange ColourRangeOf(const cv::Mat& height, double colour_quantile) {
+  std::vector<float> heights;
+  for (int r = 0; r < height.rows; ++r) {
+    for (int c = 0; c < height.cols; ++c) {
       if (const float z = height.at<float>(r, c); !std::isnan(z)) heights.push_back(z);
     }
   }
-  // The colour range spans the heights between two quantiles, not the extremes: a few wrong
-  // cells (a spike at a crater rim) would otherwise squeeze the whole map into a few colours.
-  // Heights beyond take the end colours; the colour bar says so.
   const auto quantile = [&heights](double q) {
     const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(heights.size() - 1));
     std::nth_element(heights.begin(), heights.begin() + k, heights.end());
     return heights[static_cast<std::size_t>(k)];
   };
-  const float z_lowest = *std::min_element(heights.begin(), heights.end());
-  const float z_highest = *std::max_element(heights.begin(), heights.end());
-  const double q = std::clamp(options.colour_quantile, 0.0, 0.49);
-  float z_min = quantile(q);
-  float z_max = quantile(1.0 - q);
-  const bool clipped_low = z_lowest < z_min;
-  const bool clipped_high = z_highest > z_max;
-  const double pixel_m = layers.cell_size_m * static_cast<double>(step);
-  if (!(z_max > z_min)) z_max = z_min + 1.0f;
+  ColourRange range;
+  range.z_lowest = *std::min_element(heights.begin(), heights.end());
+  range.z_highest = *std::max_element(heights.begin(), heights.end());
+  const double q = std::clamp(colour_quantile, 0.0, 0.49);
+  range.z_min = quantile(q);
+  range.z_max = quantile(1.0 - q);
+  range.clipped_low = range.z_lowest < range.z_min;
+  range.clipped_high = range.z_highest > range.z_max;
+  if (!(range.z_max > range.z_min)) range.z_max = range.z_min + 1.0f;
+  return range;
+}
 
-  // Hillshade (Horn-like central differences) and colour.
+// The colour map of the heights, shaded by a sun (Horn-like central differences); white where
+// no cell.
+cv::Mat ShadedRelief(const cv::Mat& height, const ColourRange& range, double pixel_m,
+                     const MapPreviewOptions& options) {
+  const int h = height.rows, w = height.cols;
+  const float z_min = range.z_min, z_max = range.z_max;
   const double az = options.sun_azimuth_deg * M_PI / 180.0;
   const double el = options.sun_elevation_deg * M_PI / 180.0;
   const Eigen::Vector3d sun(std::sin(az) * std::cos(el), std::cos(az) * std::cos(el), std::sin(el));
@@ -177,18 +170,20 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                     cv::saturate_cast<uchar>(in[2] * f));
     }
   }
+  return map_image;
+}
 
-  // Upscale small maps so the annotations stay legible.
-  const int zoom = std::max(1, 600 / std::max(w, h));
-  if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
-  const double px_per_m = zoom / pixel_m;
+struct LegendLine {
+  std::string label;
+  cv::Scalar colour;
+  int width;
+};
 
-  // Trajectories in grid pixels.
-  struct LegendLine {
-    std::string label;
-    cv::Scalar colour;
-    int width;
-  };
+// Draws each trajectory on `map_image` (`zoom` image pixels per grid pixel): a coloured line
+// with a black outline and its start marked. Returns the legend lines of the labelled ones.
+std::vector<LegendLine> DrawTrajectories(cv::Mat* map_image, const DemLayers& layers,
+                                         const PreviewGrid& grid, int zoom,
+                                         const std::vector<PreviewTrajectory>& trajectories) {
   std::vector<LegendLine> legend;
   for (const PreviewTrajectory& trajectory : trajectories) {
     const cv::Scalar colour(trajectory.rgb[2], trajectory.rgb[1], trajectory.rgb[0]);
@@ -198,34 +193,48 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
     for (const Eigen::Vector3d& p : trajectory.points) {
       if (!p.allFinite()) continue;
       const Eigen::Vector2d g = layers.WorldToGrid(p.x(), p.y());
-      const double gx = g.x() / layers.cell_size_m - static_cast<double>(lo.x);
-      const double gy = static_cast<double>(hi.y + 1) - g.y() / layers.cell_size_m;
-      line.emplace_back(static_cast<int>(std::lround(gx / step * zoom)),
-                        static_cast<int>(std::lround(gy / step * zoom)));
+      const double gx = g.x() / layers.cell_size_m - static_cast<double>(grid.lo.x);
+      const double gy = static_cast<double>(grid.hi.y + 1) - g.y() / layers.cell_size_m;
+      line.emplace_back(static_cast<int>(std::lround(gx / grid.step * zoom)),
+                        static_cast<int>(std::lround(gy / grid.step * zoom)));
     }
     if (!line.empty()) {
       const int width = std::max(1, trajectory.width_px);
-      cv::polylines(map_image, line, false, cv::Scalar(0, 0, 0), width + 2, cv::LINE_AA);
-      cv::polylines(map_image, line, false, colour, width, cv::LINE_AA);
-      cv::circle(map_image, line.front(), 5, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
-      cv::circle(map_image, line.front(), 3, colour, cv::FILLED, cv::LINE_AA);
+      cv::polylines(*map_image, line, false, cv::Scalar(0, 0, 0), width + 2, cv::LINE_AA);
+      cv::polylines(*map_image, line, false, colour, width, cv::LINE_AA);
+      cv::circle(*map_image, line.front(), 5, cv::Scalar(0, 0, 0), cv::FILLED, cv::LINE_AA);
+      cv::circle(*map_image, line.front(), 3, colour, cv::FILLED, cv::LINE_AA);
     }
   }
+  return legend;
+}
 
-  // Canvas: map, colour bar on the right, scale bar and north arrow below.
-  const int margin = 20;
-  const int bar_w = 20;
-  const int legend_w = 110;
-  const int bottom = 50 + 20 * static_cast<int>(legend.size());
-  const int bar_h = std::max(100, map_image.rows);
-  cv::Mat canvas(std::max(map_image.rows, bar_h + 20) + 2 * margin + bottom,
-                 map_image.cols + 2 * margin + legend_w, CV_8UC3, kBackground);
-  map_image.copyTo(canvas(cv::Rect(margin, margin, map_image.cols, map_image.rows)));
-  cv::rectangle(canvas, cv::Rect(margin - 1, margin - 1, map_image.cols + 2, map_image.rows + 2),
-                kText, 1);
+// Canvas: the map at (kMargin, kMargin), the colour bar on its right, the scale bar, north
+// arrow and legend below.
+constexpr int kMargin = 20;
+struct CanvasLayout {
+  int rows = 0, cols = 0;
+  int map_cols = 0;  ///< [px] the map's width on the canvas
+  int bottom = 0;    ///< [px] the band under the map: scale bar, north arrow, legend
+  int bar_x = 0, bar_top = kMargin, bar_h = 0, bar_w = 20;  ///< colour bar [px]
+};
 
-  const int bar_x = margin * 2 + map_image.cols;
-  const int bar_top = margin;
+CanvasLayout LayOut(const cv::Mat& map_image, std::size_t legend_lines) {
+  constexpr int kLegendWidth = 110;
+  CanvasLayout layout;
+  layout.map_cols = map_image.cols;
+  layout.bottom = 50 + 20 * static_cast<int>(legend_lines);
+  layout.bar_h = std::max(100, map_image.rows);
+  layout.rows = std::max(map_image.rows, layout.bar_h + 20) + 2 * kMargin + layout.bottom;
+  layout.cols = map_image.cols + 2 * kMargin + kLegendWidth;
+  layout.bar_x = kMargin * 2 + map_image.cols;
+  return layout;
+}
+
+// The colour bar in metres with its ticks, and the extremes beyond its ends.
+void DrawColourBar(cv::Mat* canvas, const CanvasLayout& l, const ColourRange& colours) {
+  const int bar_x = l.bar_x, bar_top = l.bar_top, bar_h = l.bar_h, bar_w = l.bar_w;
+  const float z_min = colours.z_min, z_max = colours.z_max;
   // The colour map once (applyColorMap builds its table on every call: one call per row of the
   // bar took most of a publication's dem.png).
   cv::Mat ramp(256, 1, CV_8U), ramp_rgb;
@@ -233,47 +242,106 @@ void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
   cv::applyColorMap(ramp, ramp_rgb, cv::COLORMAP_TURBO);
   for (int i = 0; i < bar_h; ++i) {
     const cv::Vec3b c = ramp_rgb.at<cv::Vec3b>(255 - 255 * i / std::max(1, bar_h - 1), 0);
-    cv::line(canvas, {bar_x, bar_top + i}, {bar_x + bar_w, bar_top + i}, cv::Scalar(c), 1);
+    cv::line(*canvas, {bar_x, bar_top + i}, {bar_x + bar_w, bar_top + i}, cv::Scalar(c), 1);
   }
   const double range = z_max - z_min;
   const double tick = NiceBelow(range / 4.0);
   for (double v = std::ceil(z_min / tick) * tick; v <= z_max + 1e-9; v += tick) {
     const int y = bar_top + static_cast<int>((z_max - v) / range * (bar_h - 1));
-    cv::line(canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kText, 1);
-    cv::putText(canvas, Format(v, tick), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                kText, 1, cv::LINE_AA);
+    cv::line(*canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kText, 1);
+    cv::putText(*canvas, TickLabel(v, tick), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX,
+                0.45, kText, 1, cv::LINE_AA);
   }
-  cv::putText(canvas, "m", {bar_x, bar_top + bar_h + 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
+  cv::putText(*canvas, "m", {bar_x, bar_top + bar_h + 15}, cv::FONT_HERSHEY_SIMPLEX, 0.45, kText, 1,
               cv::LINE_AA);
   // Heights beyond the bar's range: the extreme, at the end it is clipped to.
-  if (clipped_high) {
-    cv::putText(canvas, "max " + Format(z_highest, tick), {bar_x - 4, bar_top - 6},
+  if (colours.clipped_high) {
+    cv::putText(*canvas, "max " + TickLabel(colours.z_highest, tick), {bar_x - 4, bar_top - 6},
                 cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
   }
-  if (clipped_low) {
-    cv::putText(canvas, "min " + Format(z_lowest, tick), {bar_x - 4, bar_top + bar_h + 30},
-                cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1, cv::LINE_AA);
+  if (colours.clipped_low) {
+    cv::putText(*canvas, "min " + TickLabel(colours.z_lowest, tick),
+                {bar_x - 4, bar_top + bar_h + 30}, cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1,
+                cv::LINE_AA);
   }
+}
 
-  const double bar_m = NiceBelow(map_image.cols / px_per_m / 4.0);
+// Under the map: a scale bar of a nice length (`px_per_m` canvas pixels per metre), the north
+// arrow, and one legend line per labelled trajectory.
+void DrawScaleBarAndLegend(cv::Mat* canvas, const CanvasLayout& l, double px_per_m,
+                           const std::vector<LegendLine>& legend) {
+  const double bar_m = NiceBelow(l.map_cols / px_per_m / 4.0);
   const int bar_px = static_cast<int>(std::lround(bar_m * px_per_m));
-  const int sy = canvas.rows - bottom + 10;
-  cv::rectangle(canvas, cv::Rect(margin, sy - 5, bar_px, 6), kText, cv::FILLED);
-  cv::putText(canvas, Format(bar_m, bar_m) + " m", {margin + bar_px + 8, sy + 2},
+  const int sy = canvas->rows - l.bottom + 10;
+  cv::rectangle(*canvas, cv::Rect(kMargin, sy - 5, bar_px, 6), kText, cv::FILLED);
+  cv::putText(*canvas, TickLabel(bar_m, bar_m) + " m", {kMargin + bar_px + 8, sy + 2},
               cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
-  const int nx = margin + map_image.cols - 10;
-  cv::arrowedLine(canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
-  cv::putText(canvas, "N", {nx - 24, sy + 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1, cv::LINE_AA);
+  const int nx = kMargin + l.map_cols - 10;
+  cv::arrowedLine(*canvas, {nx, sy + 8}, {nx, sy - 18}, kText, 2, cv::LINE_AA, 0, 0.35);
+  cv::putText(*canvas, "N", {nx - 24, sy + 2}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
+              cv::LINE_AA);
   int ly = sy + 30;
-  for (const LegendLine& l : legend) {
-    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, cv::Scalar(0, 0, 0), l.width + 2,
+  for (const LegendLine& line : legend) {
+    cv::line(*canvas, {kMargin, ly - 4}, {kMargin + 30, ly - 4}, cv::Scalar(0, 0, 0),
+             line.width + 2, cv::LINE_AA);
+    cv::line(*canvas, {kMargin, ly - 4}, {kMargin + 30, ly - 4}, line.colour, line.width,
              cv::LINE_AA);
-    cv::line(canvas, {margin, ly - 4}, {margin + 30, ly - 4}, l.colour, l.width, cv::LINE_AA);
-    cv::putText(canvas, l.label, {margin + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
+    cv::putText(*canvas, line.label, {kMargin + 38, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, kText, 1,
                 cv::LINE_AA);
     ly += 20;
   }
-  encode_and_write(canvas);
+}
+
+}  // namespace
+
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<Eigen::Vector3d>& trajectory_world,
+                     const MapPreviewOptions& options) {
+  std::vector<PreviewTrajectory> trajectories;
+  if (!trajectory_world.empty()) trajectories.push_back({"", {255, 255, 255}, trajectory_world});
+  WriteDemPreview(path, map, trajectories, options);
+}
+
+void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options) {
+  DemLayers layers;
+  try {
+    layers = RasteriseDem(map);
+  } catch (const IoError& e) {
+    throw IoError(path.string() + ": " + e.what());
+  }
+  WriteDemPreview(path, layers, trajectories, options);
+}
+
+void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
+                     const std::vector<PreviewTrajectory>& trajectories,
+                     const MapPreviewOptions& options) {
+  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) {
+    cv::Mat image(120, 320, CV_8UC3, kBackground);
+    cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
+    return EncodeAndWrite(path, image);
+  }
+  PreviewGrid grid = PreviewBounds(layers, trajectories, options.max_map_px);
+  Rasterise(layers, &grid);
+  const ColourRange colours = ColourRangeOf(grid.height, options.colour_quantile);
+  const double pixel_m = layers.cell_size_m * static_cast<double>(grid.step);
+  cv::Mat map_image = ShadedRelief(grid.height, colours, pixel_m, options);
+
+  // Upscale small maps so the annotations stay legible.
+  const int zoom = std::max(1, 600 / std::max(grid.height.cols, grid.height.rows));
+  if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
+  const std::vector<LegendLine> legend =
+      DrawTrajectories(&map_image, layers, grid, zoom, trajectories);
+
+  const CanvasLayout layout = LayOut(map_image, legend.size());
+  cv::Mat canvas(layout.rows, layout.cols, CV_8UC3, kBackground);
+  map_image.copyTo(canvas(cv::Rect(kMargin, kMargin, map_image.cols, map_image.rows)));
+  cv::rectangle(canvas, cv::Rect(kMargin - 1, kMargin - 1, map_image.cols + 2, map_image.rows + 2),
+                kText, 1);
+  DrawColourBar(&canvas, layout, colours);
+  DrawScaleBarAndLegend(&canvas, layout, zoom / pixel_m, legend);
+  EncodeAndWrite(path, canvas);
 }
 
 }  // namespace rovermap::io

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "io/Rpy.hpp"
 #include "mapper/PoseChain.hpp"
 
 namespace rovermap::mapper {
@@ -30,7 +31,7 @@ Eigen::Isometry3d AttitudePrior::Update(const Eigen::Isometry3d& T_world_body,
   const Eigen::Vector3d updated(rpy.x() + gain * Wrap(rpy_odom.x() - rpy.x()),
                                 rpy.y() + gain * Wrap(rpy_odom.y() - rpy.y()), rpy.z());
   Eigen::Isometry3d T = T_world_body;
-  if (updated.allFinite()) T.linear() = RotationFromEulerRpy(updated);
+  if (updated.allFinite()) T.linear() = io::RotationFromRpy(updated);
   return T;
 }
 

@@ -14,13 +14,6 @@ constexpr double kGimbalCos = 1e-12;
 
 }  // namespace
 
-Eigen::Matrix3d RotationFromEulerRpy(const Eigen::Vector3d& rpy_rad) {
-  return (Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
 Eigen::Vector3d EulerRpyFromRotation(const Eigen::Matrix3d& R) {
   // R = Rz(y)·Ry(p)·Rx(r): first column (cy·cp, sy·cp, −sp).
   const double cos_pitch = std::hypot(R(0, 0), R(1, 0));

@@ -10,15 +10,12 @@
 
 namespace rovermap::mapper {
 
-/// Rotation from roll, pitch, yaw [rad]: R = Rz(yaw)·Ry(pitch)·Rx(roll), the convention of
-/// sequence.yaml (docs/design.md §4). Never fails; non-finite angles give a non-finite matrix.
-Eigen::Matrix3d RotationFromEulerRpy(const Eigen::Vector3d& rpy_rad);
-
 /// Roll, pitch, yaw [rad] with R = Rz(yaw)·Ry(pitch)·Rx(roll); roll and yaw in [−π, π], pitch
-/// in [−π/2, π/2]. Inverse of RotationFromEulerRpy for |pitch| < π/2 (angles taken modulo 2π).
+/// in [−π/2, π/2]. Inverse of io::RotationFromRpy (io/Rpy.hpp) for |pitch| < π/2 (angles taken
+/// modulo 2π).
 /// Gimbal lock (|pitch| = π/2, cos(pitch) < 1e-12): only yaw − roll (pitch = +π/2) or
 /// yaw + roll (pitch = −π/2) is defined, so roll is returned as 0 and yaw carries that
-/// combination; RotationFromEulerRpy of the result still gives R back.
+/// combination; io::RotationFromRpy of the result still gives R back.
 /// `R` must be a rotation; a non-finite R gives non-finite angles.
 Eigen::Vector3d EulerRpyFromRotation(const Eigen::Matrix3d& R);
 

@@ -604,6 +604,8 @@ MosaicResult AssembleMosaic(const MosaicPlan& plan, int parts,
   return result;
 }
 
+fs::path MosaicReportPath(const fs::path& out) { return fs::path(out).replace_extension(".json"); }
+
 std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& options) {
   nlohmann::json inputs = nlohmann::json::array();
   for (const InputReport& r : result.inputs) {

@@ -76,7 +76,12 @@ MosaicResult BuildMosaic(const std::vector<std::filesystem::path>& inputs,
                          const MosaicOptions& options,
                          const registration::RegistrationOptions& registration);
 
-/// The report as JSON text (mosaic.json).
+/// Where the report of the mosaic `out` goes: beside it, named after it (`NAME.json` for
+/// `NAME.tif`), so that mosaics of different names share a folder. Equals `out` when `out`
+/// ends in `.json`.
+std::filesystem::path MosaicReportPath(const std::filesystem::path& out);
+
+/// The report as JSON text (NAME.json beside NAME.tif; MosaicReportPath).
 std::string MosaicReportJson(const MosaicResult& result, const MosaicOptions& options);
 
 // The same mosaic in three steps, for a campaign that runs them as separate jobs (apps/Campaign):

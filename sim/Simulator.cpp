@@ -11,6 +11,7 @@
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/Rpy.hpp"
 
 namespace rovermap::sim {
 namespace {
@@ -22,13 +23,6 @@ namespace fs = std::filesystem;
 constexpr std::uint64_t kSaltImageNoise = 1000;
 constexpr std::uint64_t kSaltCloud = 2000;
 constexpr std::uint64_t kSaltOdometry = 3000;
-
-Eigen::Matrix3d Rpy(double roll, double pitch, double yaw) {
-  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
 
 double WrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
@@ -109,7 +103,7 @@ Simulator::Simulator(const SimOptions& options)
   T_body_sensor_.linear() =
       Eigen::AngleAxisd(o.camera_tilt_deg * kDegToRad, Eigen::Vector3d::UnitY())
           .toRotationMatrix() *
-      Rpy(-M_PI / 2, 0, -M_PI / 2);
+      io::RotationFromRpy(-M_PI / 2, 0, -M_PI / 2);
   T_body_sensor_.translation() = Eigen::Vector3d(o.mast_forward_m, 0, o.mast_height_m);
 
   // True poses: height, roll and pitch from the terrain under the four wheels.
@@ -135,7 +129,7 @@ Simulator::Simulator(const SimOptions& options)
     const double roll = std::atan2(0.5 * (fl + rl) - 0.5 * (fr + rr), o.track_m);
     io::StampedPose pose;
     pose.timestamp = k / o.frame_rate_hz;
-    pose.T_world_body.linear() = Rpy(roll, pitch, yaw);
+    pose.T_world_body.linear() = io::RotationFromRpy(roll, pitch, yaw);
     pose.T_world_body.translation() = Eigen::Vector3d(p.x(), p.y(), 0.25 * (fl + fr + rl + rr));
     truth_.push_back(pose);
   }
@@ -164,7 +158,8 @@ Simulator::Simulator(const SimOptions& options)
     }();
     io::StampedPose pose;
     pose.timestamp = truth_[k].timestamp;
-    pose.T_world_body.linear() = Rpy(rpy_true.x(), rpy_true.y(), rpy_true.z() + yaw_error);
+    pose.T_world_body.linear() =
+        io::RotationFromRpy(rpy_true.x(), rpy_true.y(), rpy_true.z() + yaw_error);
     pose.T_world_body.translation() = odometry_.back().T_world_body.translation() + step_world;
     odometry_.push_back(pose);
   }

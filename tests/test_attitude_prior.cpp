@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include "mapper/AttitudePrior.hpp"
+#include "io/Rpy.hpp"
 #include "mapper/PoseChain.hpp"
 
 using namespace rovermap::mapper;
+using rovermap::io::RotationFromRpy;
 
 namespace {
 
@@ -15,7 +17,7 @@ constexpr double kDeg = M_PI / 180.0;
 
 Eigen::Isometry3d Pose(double roll_deg, double pitch_deg, double yaw_deg) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = RotationFromEulerRpy(Eigen::Vector3d(roll_deg, pitch_deg, yaw_deg) * kDeg);
+  T.linear() = RotationFromRpy(Eigen::Vector3d(roll_deg, pitch_deg, yaw_deg) * kDeg);
   T.translation() = Eigen::Vector3d(3.0, -1.0, 0.5);
   return T;
 }

@@ -239,7 +239,7 @@ class BadInput : public rovermap::testing::ServeFixture {
   }
 
   // A refused mosaic: no JSON on stdout; in MOSAIC nothing but the `allowed` names (no COG, no
-  // mosaic.json, no temporary).
+  // m.json, no temporary).
   void ExpectNoMosaic(const CommandResult& r, const std::set<std::string>& allowed = {}) {
     EXPECT_TRUE(r.out.empty()) << r.out;
     ExpectNoOutput(MosaicFolder(), allowed);
@@ -910,7 +910,7 @@ TEST_F(BadInput, Eval_DemOtherCrs) {
 
 // ---------------------------------------------------------------------------------------------
 // mosaic DEM.tif ... --out MOSAIC.tif: every input and --out are checked before any output; on
-// any failure MOSAIC holds neither the COG nor mosaic.json nor a temporary.
+// any failure MOSAIC holds neither the COG nor its report m.json nor a temporary.
 
 TEST_F(BadInput, Mosaic_MissingFile) {
   const fs::path dem = Copy(kTerrain, "dem.tif");
@@ -1046,11 +1046,11 @@ TEST_F(BadInput, Mosaic_OutputNotWritable) {
 
 TEST_F(BadInput, Mosaic_OutputExistsWithoutForce) {
   Put(MosaicFolder() / "m.tif", "previous mosaic\n");
-  Put(MosaicFolder() / "mosaic.json", "{}\n");
+  Put(MosaicFolder() / "m.json", "{}\n");
   const CommandResult r = Mosaic(Copy(kTerrain, "dem.tif").string());
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(Has(r.err, "m.tif exists (use --force to replace it)")) << r.err;
-  ExpectNoMosaic(r, {"m.tif", "mosaic.json"});
+  ExpectNoMosaic(r, {"m.tif", "m.json"});
   EXPECT_EQ(Slurp(MosaicFolder() / "m.tif"), "previous mosaic\n");
-  EXPECT_EQ(Slurp(MosaicFolder() / "mosaic.json"), "{}\n");
+  EXPECT_EQ(Slurp(MosaicFolder() / "m.json"), "{}\n");
 }

@@ -597,13 +597,41 @@ TEST_F(MosaicTest, CommandWritesTheMosaicAndRefusesToOverwrite) {
   const std::string out = (dir_ / "m.tif").string();
   CommandResult r = Rovermap("mosaic " + a + " --out " + out);
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_TRUE(fs::exists(dir_ / "mosaic.json"));
+  EXPECT_TRUE(fs::exists(dir_ / "m.json"));
   EXPECT_NE(r.out.find("\"valid_cells\": 400"), std::string::npos) << r.out;
   r = Rovermap("mosaic " + a + " --out " + out);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
   r = Rovermap("mosaic " + a + " --out " + out + " --force --set mosaic.tile_cells=16");
   EXPECT_EQ(r.status, 0) << r.err;
+}
+
+// Each mosaic's report is named after it: a second mosaic of another name in the same folder
+// is neither refused for the first one's report nor replaces it.
+TEST_F(MosaicTest, TwoMosaicsInOneFolderEachHaveTheirOwnReport) {
+  WriteDem(dir_ / "a.tif", 20, 20, NorthUp(500000, 4000020, 1.0), "EPSG:32633", Plane(0.05f));
+  WriteDem(dir_ / "b.tif", 10, 20, NorthUp(500000, 4000020, 1.0), "EPSG:32633", Plane(0.05f));
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out);
+  CommandResult r =
+      Rovermap("mosaic " + (dir_ / "a.tif").string() + " --out " + (out / "first.tif").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string first_report = Slurp(out / "first.json");
+  EXPECT_EQ(first_report, r.out);
+  r = Rovermap("mosaic " + (dir_ / "b.tif").string() + " --out " + (out / "second.tif").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(Slurp(out / "second.json"), r.out);
+  EXPECT_EQ(Slurp(out / "first.json"), first_report);
+  EXPECT_NE(first_report, r.out);
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(out)) files.push_back(entry.path().filename());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files,
+            (std::vector<std::string>{"first.json", "first.tif", "second.json", "second.tif"}));
+  // An output named .json would be its own report.
+  r = Rovermap("mosaic " + (dir_ / "a.tif").string() + " --out " + (out / "m.json").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_FALSE(fs::exists(out / "m.json"));
 }
 
 class MosaicErrorTest : public MosaicTest {

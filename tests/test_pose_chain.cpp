@@ -10,9 +10,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include "io/Rpy.hpp"
 #include "mapper/PoseChain.hpp"
 
 using namespace rovermap::mapper;
+using rovermap::io::RotationFromRpy;
 
 namespace {
 
@@ -21,7 +23,7 @@ constexpr double kDeg = kPi / 180.0;
 
 Eigen::Isometry3d MakePose(const Eigen::Vector3d& rpy_rad, const Eigen::Vector3d& t) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = RotationFromEulerRpy(rpy_rad);
+  T.linear() = RotationFromRpy(rpy_rad);
   T.translation() = t;
   return T;
 }
@@ -72,14 +74,14 @@ TEST(EulerRpy, MatchesTheDesignConvention) {
   for (int i = 0; i < 200; ++i) {
     const double r = u(rng), p = u(rng) / 2.0, y = u(rng);
     const Eigen::Matrix3d expected = Rz(y) * Ry(p) * Rx(r);
-    EXPECT_LT((RotationFromEulerRpy({r, p, y}) - expected).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_LT((RotationFromRpy({r, p, y}) - expected).cwiseAbs().maxCoeff(), 1e-14);
   }
   // Positive yaw turns x towards y; positive pitch turns x down (towards −z) about y.
-  EXPECT_TRUE((RotationFromEulerRpy({0, 0, 90 * kDeg}) * Eigen::Vector3d::UnitX())
+  EXPECT_TRUE((RotationFromRpy({0, 0, 90 * kDeg}) * Eigen::Vector3d::UnitX())
                   .isApprox(Eigen::Vector3d::UnitY(), 1e-12));
-  EXPECT_TRUE((RotationFromEulerRpy({0, 30 * kDeg, 0}) * Eigen::Vector3d::UnitX()).z() < 0.0);
+  EXPECT_TRUE((RotationFromRpy({0, 30 * kDeg, 0}) * Eigen::Vector3d::UnitX()).z() < 0.0);
   // docs/design.md §4: a level, forward-looking OpenCV camera is rpy [-90, 0, -90].
-  const Eigen::Matrix3d R_body_camera = RotationFromEulerRpy({-90 * kDeg, 0, -90 * kDeg});
+  const Eigen::Matrix3d R_body_camera = RotationFromRpy({-90 * kDeg, 0, -90 * kDeg});
   EXPECT_TRUE((R_body_camera * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
   EXPECT_TRUE(
       (R_body_camera * Eigen::Vector3d::UnitX()).isApprox(-Eigen::Vector3d::UnitY(), 1e-12));
@@ -97,7 +99,7 @@ TEST(EulerRpy, RoundTripAwayFromGimbalLock) {
   std::uniform_real_distribution<double> pitch(-89.0, 89.0);
   for (int i = 0; i < 5000; ++i) {
     const Eigen::Vector3d rpy(angle(rng) * kDeg, pitch(rng) * kDeg, angle(rng) * kDeg);
-    const Eigen::Vector3d back = EulerRpyFromRotation(RotationFromEulerRpy(rpy));
+    const Eigen::Vector3d back = EulerRpyFromRotation(RotationFromRpy(rpy));
     EXPECT_NEAR(AngleDiff(back.x(), rpy.x()), 0.0, 1e-10) << i;
     EXPECT_NEAR(back.y(), rpy.y(), 1e-10) << i;
     EXPECT_NEAR(AngleDiff(back.z(), rpy.z()), 0.0, 1e-10) << i;
@@ -129,7 +131,7 @@ TEST(EulerRpy, AnyRotationIsRebuilt) {
   }
   for (const Eigen::Matrix3d& R : rotations) {
     const Eigen::Vector3d rpy = EulerRpyFromRotation(R);
-    EXPECT_LT((RotationFromEulerRpy(rpy) - R).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((RotationFromRpy(rpy) - R).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_LE(std::abs(rpy.y()), kPi / 2);
   }
 }
@@ -137,13 +139,13 @@ TEST(EulerRpy, AnyRotationIsRebuilt) {
 TEST(EulerRpy, GimbalLockPutsEverythingInYaw) {
   for (double sign : {1.0, -1.0}) {
     const double roll = 30 * kDeg, yaw = 20 * kDeg;
-    const Eigen::Matrix3d R = RotationFromEulerRpy({roll, sign * kPi / 2, yaw});
+    const Eigen::Matrix3d R = RotationFromRpy({roll, sign * kPi / 2, yaw});
     const Eigen::Vector3d rpy = EulerRpyFromRotation(R);
     EXPECT_EQ(rpy.x(), 0.0);
     EXPECT_NEAR(rpy.y(), sign * kPi / 2, 1e-12);
     // +90°: only yaw − roll is defined; −90°: only yaw + roll.
     EXPECT_NEAR(AngleDiff(rpy.z(), yaw - sign * roll), 0.0, 1e-12);
-    EXPECT_LT((RotationFromEulerRpy(rpy) - R).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((RotationFromRpy(rpy) - R).cwiseAbs().maxCoeff(), 1e-12);
   }
 }
 

@@ -364,7 +364,7 @@ TEST_F(ReplayFault, DriftCsv) { ExpectStopsAt("drift.csv"); }
 // GDAL 3.6 did not report the short write: a truncated dem.tif replaced the previous one.
 TEST_F(ReplayFault, DemTif) { ExpectStopsAt("dem.tif"); }
 
-// --- `rovermap mosaic --force` over a previous mosaic: the COG, then mosaic.json. ---
+// --- `rovermap mosaic --force` over a previous mosaic: the COG, then its report m.json. ---
 
 class MosaicFault : public WriteFaults {
  protected:
@@ -388,22 +388,22 @@ class MosaicFault : public WriteFaults {
   }
 
   // The mosaic of `inputs` over the previous one in OUT, with files limited to `limit` bytes:
-  // status 1 naming `target`; the previous m.tif and mosaic.json byte for byte, nothing else.
+  // status 1 naming `target`; the previous m.tif and m.json byte for byte, nothing else.
   void ExpectFailsKeepingThePrevious(const std::vector<fs::path>& inputs, rlim_t limit,
                                      const std::string& target) {
     const std::string cog = Slurp(out_ / "m.tif");
-    const std::string report = Slurp(out_ / "mosaic.json");
+    const std::string report = Slurp(out_ / "m.json");
     ASSERT_FALSE(cog.empty());
     const ChildResult r = Mosaic(inputs, out_, limit);
     EXPECT_EQ(r.status, 1) << r.message;
     EXPECT_NE(r.message.find((out_ / target).string()), std::string::npos) << r.message;
     EXPECT_TRUE(Same("m.tif", Slurp(out_ / "m.tif"), cog));
-    EXPECT_TRUE(Same("mosaic.json", Slurp(out_ / "mosaic.json"), report));
+    EXPECT_TRUE(Same("m.json", Slurp(out_ / "m.json"), report));
     std::vector<std::string> left;  // the temporaries are .m.tif.staging-*, .m.tif.tmp-*, ...
     for (const auto& entry : fs::directory_iterator(out_))
       left.push_back(entry.path().filename().string());
     std::sort(left.begin(), left.end());
-    EXPECT_EQ(left, (std::vector<std::string>{"m.tif", "mosaic.json"}));
+    EXPECT_EQ(left, (std::vector<std::string>{"m.json", "m.tif"}));
     last_message_ = r.message;
   }
 
@@ -426,7 +426,7 @@ TEST_F(MosaicFault, CogFullKeepsThePreviousMosaic) {
   EXPECT_NE(last_message_.find("cannot write the COG"), std::string::npos) << last_message_;
 }
 
-// The COG is renamed into place only once mosaic.json is written: a full disk on mosaic.json
+// The COG is renamed into place only once m.json is written: a full disk on m.json
 // keeps the previous COG too. A report outgrows its COG with many inputs: the previous mosaic
 // is of 23 small DEMs, the new one of 24 (a longer report, the COG of the same size).
 TEST_F(MosaicFault, ReportFullKeepsThePreviousMosaicAndReport) {
@@ -441,9 +441,9 @@ TEST_F(MosaicFault, ReportFullKeepsThePreviousMosaicAndReport) {
   }
   ASSERT_EQ(Mosaic({inputs.begin(), inputs.end() - 1}, out_).status, 0);
   const rlim_t cog = fs::file_size(out_ / "m.tif");
-  const rlim_t report = fs::file_size(out_ / "mosaic.json");
-  ASSERT_LT(cog, report) << "the limit must fall on mosaic.json, not on the COG";
-  ExpectFailsKeepingThePrevious(inputs, (cog + report) / 2, "mosaic.json");
+  const rlim_t report = fs::file_size(out_ / "m.json");
+  ASSERT_LT(cog, report) << "the limit must fall on m.json, not on the COG";
+  ExpectFailsKeepingThePrevious(inputs, (cog + report) / 2, "m.json");
 }
 
 // --- `rovermap serve`: it stops, exit 1 naming the file (docs/serve.md); a restart loses
