@@ -1,7 +1,6 @@
 #pragma once
 // Where in a ROS 1 bag the frames, poses, calibration and origin are, and what the bag does not
-// say. A plain header-only struct: config/ fills it from the `bag.` keys without linking io, and
-// io/BagSource reads by it.
+// say: config/ fills it from the `bag.` keys, io/BagSource reads by it.
 
 #include <Eigen/Geometry>
 #include <optional>

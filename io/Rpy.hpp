@@ -1,6 +1,6 @@
 #pragma once
 // Rotations as sequence.yaml (`rotation_rpy_deg`, `quaternion`), the `bag.` config and a bag's
-// transforms give them. Header-only: config/ uses it without linking io/.
+// transforms give them.
 
 #include <Eigen/Geometry>
 
