@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "config/Config.hpp"
-#include "io/CameraModel.hpp"
 #include "io/FileUtil.hpp"
+#include "io/SequenceYaml.hpp"
 
 namespace rovermap::config::detail {
 

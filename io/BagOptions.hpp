@@ -1,6 +1,7 @@
 #pragma once
 // Where in a ROS 1 bag the frames, poses, calibration and origin are, and what the bag does not
-// say: config/ fills it from the `bag.` keys, io/BagSource reads by it.
+// say. A plain struct: config/ fills it from the `bag.` keys (config sits above io), and
+// io/BagSource reads by it.
 
 #include <Eigen/Geometry>
 #include <optional>

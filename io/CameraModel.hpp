@@ -1,13 +1,8 @@
 #pragma once
-// The camera of a sequence (docs/design.md §4): io/SequenceYaml fills it from sequence.yaml,
-// io/Sequence hands it out.
+// The camera of a sequence (docs/design.md §4). A plain struct: io/SequenceYaml fills it from
+// sequence.yaml, io/Sequence hands it out.
 
 namespace rovermap::io {
-
-/// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
-/// could never be read back (sequence.yaml's camera and `sim.image_*` obey them).
-constexpr int kMaxImageSide = 1 << 20;
-constexpr long long kMaxImagePixels = 1LL << 30;
 
 /// `camera:` of sequence.yaml: a rectified stereo pair (pinhole, shared intrinsics).
 struct CameraModel {

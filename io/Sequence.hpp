@@ -18,8 +18,9 @@
 
 namespace rovermap::io {
 
-/// Reads sequence.yaml (io/SequenceYaml) and converts it.
-/// @throw IoError "DIR/sequence.yaml:LINE: KEY: reason" on any problem (see ReadSequenceYaml).
+/// Reads sequence.yaml (io/SequenceYaml, the YAML reader of the input formats) and converts it.
+/// @throw IoError "DIR/sequence.yaml:LINE: KEY: reason" on any problem (see
+///        ReadSequenceYaml).
 SequenceInfo ReadSequenceInfo(const std::filesystem::path& sequence_dir);
 
 /// File names of frame `index` inside frames/: "000042.left.png", "000042.right.png",

@@ -13,6 +13,11 @@
 
 namespace rovermap::io {
 
+/// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
+/// could never be read back (sequence.yaml's camera and `sim.image_*` obey them).
+constexpr int kMaxImageSide = 1 << 20;
+constexpr long long kMaxImagePixels = 1LL << 30;
+
 /// The keys of sequence.yaml as written (angles in degrees, lengths in metres), after range
 /// checks on each value. Exactly one of `rotation_rpy_deg` and `quaternion_xyzw` is set.
 struct SequenceYaml {
