@@ -61,6 +61,7 @@ std::vector<std::string> KeysSetIn(const std::filesystem::path& file);
 using io::kMaxImagePixels;
 using io::kMaxImageSide;
 using io::ReadText;
+
 /// Most frames `simulate` makes (it holds about 1 kB per frame).
 constexpr int kMaxSimFrames = 100000;
 
