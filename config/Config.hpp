@@ -6,15 +6,15 @@
 #include <string_view>
 #include <vector>
 
-#include "campaign/CampaignOptions.hpp"  // header-only: config does not link campaign
+#include "campaign/CampaignOptions.hpp"
 #include "config/ConfigError.hpp"
 #include "dem/ElevationMap.hpp"
 #include "dem/OctoMapOptions.hpp"
 #include "eval/EvalOptions.hpp"
-#include "io/BagOptions.hpp"  // header-only: config does not link io
+#include "io/BagOptions.hpp"
 #include "mapper/MapperOptions.hpp"
 #include "mapper/ServeOptions.hpp"
-#include "mosaic/MosaicOptions.hpp"  // header-only: config does not link mosaic
+#include "mosaic/MosaicOptions.hpp"
 #include "registration/Options.hpp"
 #include "sim/SimOptions.hpp"
 #include "stereo/StereoOptions.hpp"

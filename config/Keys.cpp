@@ -3,8 +3,6 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <system_error>
 
 namespace rovermap::config::detail {
@@ -479,15 +477,6 @@ const char* SkipPlus(const std::string& text) {
 }
 
 }  // namespace
-
-std::optional<std::string> ReadText(const std::filesystem::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) return std::nullopt;
-  std::ostringstream text;
-  text << stream.rdbuf();
-  if (stream.bad()) return std::nullopt;
-  return text.str();
-}
 
 const std::vector<KeyEntry>& Registry() {
   static const std::vector<KeyEntry> keys = BuildRegistry();

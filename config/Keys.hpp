@@ -15,6 +15,8 @@
 #include <vector>
 
 #include "config/Config.hpp"
+#include "io/FileUtil.hpp"
+#include "io/SequenceYaml.hpp"
 
 namespace rovermap::config::detail {
 
@@ -55,13 +57,11 @@ const std::vector<KeyRule>& Rules();
 /// other: LoadConfig does that). @throw ConfigError as LoadConfig.
 std::vector<std::string> KeysSetIn(const std::filesystem::path& file);
 
-/// The bytes of `path`; nullopt if it cannot be opened or read (the caller names the file).
-std::optional<std::string> ReadText(const std::filesystem::path& path);
+// Shared with io/SequenceYaml: one file reader, one image size limit.
+using io::kMaxImagePixels;
+using io::kMaxImageSide;
+using io::ReadText;
 
-/// Largest image side and pixel count: OpenCV's default imread limits, so a bigger image
-/// could never be read back (sequence.yaml's camera obeys the same).
-constexpr int kMaxImageSide = 1 << 20;
-constexpr long long kMaxImagePixels = 1LL << 30;
 /// Most frames `simulate` makes (it holds about 1 kB per frame).
 constexpr int kMaxSimFrames = 100000;
 

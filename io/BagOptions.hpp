@@ -1,6 +1,6 @@
 #pragma once
 // Where in a ROS 1 bag the frames, poses, calibration and origin are, and what the bag does not
-// say. A plain header-only struct: config/ fills it from the `bag.` keys without linking io, and
+// say. A plain struct: config/ fills it from the `bag.` keys (config sits above io), and
 // io/BagSource reads by it.
 
 #include <Eigen/Geometry>

@@ -1,6 +1,6 @@
 #pragma once
-// The camera of a sequence (docs/design.md §4). A plain header-only struct: config/SequenceYaml
-// fills it from sequence.yaml, io/Sequence hands it out, without config linking io.
+// The camera of a sequence (docs/design.md §4). A plain struct: io/SequenceYaml fills it from
+// sequence.yaml, io/Sequence hands it out.
 
 namespace rovermap::io {
 

@@ -6,7 +6,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <random>
+#include <sstream>
 #include <system_error>
 
 #include "io/IoError.hpp"
@@ -49,6 +51,15 @@ std::string RandomSuffix() {
 }
 
 }  // namespace
+
+std::optional<std::string> ReadText(const std::filesystem::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) return std::nullopt;
+  std::ostringstream text;
+  text << stream.rdbuf();
+  if (stream.bad()) return std::nullopt;
+  return text.str();
+}
 
 std::string ReadWholeFile(const std::filesystem::path& path) {
   FdGuard fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));

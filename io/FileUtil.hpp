@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -9,6 +10,10 @@ namespace rovermap::io {
 /// Reads a whole file into memory (binary, unchanged bytes).
 /// Throws IoError naming the file if it is missing, a directory or unreadable.
 std::string ReadWholeFile(const std::filesystem::path& path);
+
+/// The bytes of `path`; nullopt if it cannot be opened or read (the caller names the file;
+/// errno says why). For the YAML readers, whose messages differ from ReadWholeFile's.
+std::optional<std::string> ReadText(const std::filesystem::path& path);
 
 /// Writes `contents` to `path` atomically: the bytes go to `<path>.tmp-XXXXXX` in the same
 /// directory, are flushed to disk, and the temporary is renamed over `path`. Readers therefore

@@ -1,7 +1,6 @@
 #pragma once
 // Rotations as sequence.yaml (`rotation_rpy_deg`, `quaternion`), the `bag.` config, a bag's
-// transforms, the simulator and the attitude prior give them. Header-only: config/ uses it
-// without linking io/.
+// transforms, the simulator and the attitude prior give them.
 
 #include <Eigen/Geometry>
 

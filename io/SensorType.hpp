@@ -1,5 +1,5 @@
 #pragma once
-// What a recording's frames hold. Header-only, so that config/ can name it without linking io.
+// What a recording's frames hold.
 
 namespace rovermap::io {
 

@@ -9,12 +9,11 @@
 #include <system_error>
 #include <vector>
 
-#include "config/ConfigError.hpp"
-#include "config/SequenceYaml.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 #include "io/Rpy.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/SequenceYaml.hpp"
 
 namespace rovermap::io {
 namespace fs = std::filesystem;
@@ -125,12 +124,7 @@ std::string FrameStem(std::size_t index) {
 }
 
 SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
-  config::SequenceYaml yaml;
-  try {
-    yaml = config::ReadSequenceYaml(sequence_dir / "sequence.yaml");
-  } catch (const config::ConfigError& e) {
-    throw IoError(e.what());  // bad input data, not a bad command line
-  }
+  const SequenceYaml yaml = ReadSequenceYaml(sequence_dir / "sequence.yaml");
   SequenceInfo info;
   info.directory = sequence_dir;
   info.sensor_type = yaml.sensor_type == "cloud" ? SensorType::kCloud : SensorType::kStereo;

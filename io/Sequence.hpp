@@ -18,9 +18,9 @@
 
 namespace rovermap::io {
 
-/// Reads sequence.yaml (in config/, the only YAML user) and converts it.
+/// Reads sequence.yaml (io/SequenceYaml, the YAML reader of the input formats) and converts it.
 /// @throw IoError "DIR/sequence.yaml:LINE: KEY: reason" on any problem (see
-///        config::ReadSequenceYaml).
+///        ReadSequenceYaml).
 SequenceInfo ReadSequenceInfo(const std::filesystem::path& sequence_dir);
 
 /// File names of frame `index` inside frames/: "000042.left.png", "000042.right.png",

@@ -3,6 +3,7 @@
 # quick when everything is already there (checks with dpkg, no network).
 set -euo pipefail
 
+# libnanoflann-dev is for bench/bench_kdtree only; the build leaves that benchmark out without it.
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libnanoflann-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev

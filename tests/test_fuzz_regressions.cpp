@@ -15,10 +15,10 @@
 
 #include "config/Config.hpp"
 #include "config/ConfigError.hpp"
-#include "config/SequenceYaml.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/SequenceYaml.hpp"
 #include "tests/fuzz/FuzzEntries.hpp"
 #include "tests/support/ErrorText.hpp"
 #include "tests/support/ScratchDir.hpp"
@@ -129,20 +129,20 @@ std::string SequenceYamlWithCamera(const std::string& width, const std::string& 
 }
 
 TEST(FuzzBounds, SequenceYamlImageOfAMillionByAMillion) {
-  const std::string message = ErrorOf<config::ConfigError>([] {
-    config::ParseSequenceYaml(SequenceYamlWithCamera("1000000", "1000000"), "seq/sequence.yaml");
+  const std::string message = ErrorOf<io::IoError>([] {
+    io::ParseSequenceYaml(SequenceYamlWithCamera("1000000", "1000000"), "seq/sequence.yaml");
   });
   EXPECT_TRUE(Contains(message,
                        "seq/sequence.yaml:5: camera: 1000000 x 1000000 = "
                        "1000000000000 pixels, more than 1073741824"));
   // One side past OpenCV's limit is named on its own line.
-  EXPECT_TRUE(Contains(ErrorOf<config::ConfigError>([] {
-                         config::ParseSequenceYaml(SequenceYamlWithCamera("640", "2000000"),
+  EXPECT_TRUE(Contains(ErrorOf<io::IoError>([] {
+                         io::ParseSequenceYaml(SequenceYamlWithCamera("640", "2000000"),
                                                    "seq/sequence.yaml");
                        }),
                        "seq/sequence.yaml:6: camera.height: must be <= 1048576 px (got 2000000)"));
   // The largest image OpenCV reads is still accepted.
-  EXPECT_NO_THROW(config::ParseSequenceYaml(SequenceYamlWithCamera("32768", "32768"), "s.yaml"));
+  EXPECT_NO_THROW(io::ParseSequenceYaml(SequenceYamlWithCamera("32768", "32768"), "s.yaml"));
 }
 
 TEST(FuzzBounds, FrameCountThatOverflows) {

@@ -15,12 +15,12 @@
 
 #include "config/Config.hpp"
 #include "config/ConfigError.hpp"
-#include "config/SequenceYaml.hpp"
 #include "eval/TrajectoryIo.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Inbox.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/SequenceYaml.hpp"
 #include "io/Tum.hpp"
 
 namespace rovermap::fuzz {
@@ -58,7 +58,7 @@ inline Outcome Kitti(std::string_view bytes) {
 }
 
 inline Outcome SequenceYaml(std::string_view bytes) {
-  return Run<config::ConfigError>([&] { config::ParseSequenceYaml(bytes, "sequence.yaml"); });
+  return Run<io::IoError>([&] { io::ParseSequenceYaml(bytes, "sequence.yaml"); });
 }
 
 inline Outcome ConfigFile(std::string_view bytes) {

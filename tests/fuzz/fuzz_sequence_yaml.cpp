@@ -1,4 +1,4 @@
-// libFuzzer target: config::ParseSequenceYaml.
+// libFuzzer target: io::ParseSequenceYaml.
 #include <cstddef>
 #include <cstdint>
 #include <string_view>

@@ -1,4 +1,4 @@
-#include "config/SequenceYaml.hpp"
+#include "io/SequenceYaml.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -10,14 +10,11 @@
 #include <system_error>
 #include <vector>
 
-#include "config/ConfigError.hpp"
-#include "config/Keys.hpp"
+#include "io/FileUtil.hpp"
+#include "io/IoError.hpp"
 
-namespace rovermap::config {
+namespace rovermap::io {
 namespace {
-
-using detail::kMaxImagePixels;
-using detail::kMaxImageSide;
 
 // Messages: "FILE:LINE: KEY: reason".
 class Reader {
@@ -28,7 +25,7 @@ class Reader {
                          const std::string& reason) const {
     std::string where = file_;
     if (!mark.is_null()) where += ":" + std::to_string(mark.line + 1);
-    throw ConfigError(where + ": " + (key.empty() ? "" : key + ": ") + reason);
+    throw IoError(where + ": " + (key.empty() ? "" : key + ": ") + reason);
   }
 
   // A mapping whose keys must all be in `allowed`; returns it.
@@ -112,12 +109,12 @@ SequenceYaml ReadSequenceYaml(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path, error)) {
     // EACCES on the directory is not "missing": say what the system said.
     if (error && error != std::errc::no_such_file_or_directory) {
-      throw ConfigError(path.string() + ": cannot access (" + error.message() + ")");
+      throw IoError(path.string() + ": cannot access (" + error.message() + ")");
     }
-    throw ConfigError(path.string() + ": missing (every sequence needs a sequence.yaml)");
+    throw IoError(path.string() + ": missing (every sequence needs a sequence.yaml)");
   }
-  const std::optional<std::string> text = detail::ReadText(path);
-  if (!text) throw ConfigError(path.string() + ": cannot read");
+  const std::optional<std::string> text = ReadText(path);
+  if (!text) throw IoError(path.string() + ": cannot read");
   return ParseSequenceYaml(*text, path);
 }
 
@@ -161,7 +158,7 @@ SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::pat
 
   if (const YAML::Node camera = root["camera"]) {
     r.Map(camera, "camera", {"width", "height", "fx", "fy", "cx", "cy", "baseline"});
-    io::CameraModel c;
+    CameraModel c;
     auto positive = [&](const char* name) {
       const YAML::Node node = r.Required(camera, "camera", name);
       const double value = r.Number(node, std::string("camera.") + name);
@@ -227,4 +224,4 @@ SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::pat
   return out;
 }
 
-}  // namespace rovermap::config
+}  // namespace rovermap::io
