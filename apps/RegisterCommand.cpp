@@ -6,6 +6,7 @@
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/RegistrationPreview.hpp"
@@ -15,10 +16,8 @@ namespace rovermap::apps {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 Eigen::Isometry3d ParseInit(const std::string& text) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

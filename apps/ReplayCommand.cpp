@@ -14,6 +14,7 @@
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
 #include "mapper/DriftReport.hpp"
@@ -25,10 +26,8 @@ namespace rovermap::apps {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // Progress on stderr: a rewritten line on a terminal, one line per frame otherwise.
 class Progress {

@@ -28,6 +28,7 @@
 #include "bench/BenchUtil.hpp"
 #include "bench/Peers.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
@@ -41,6 +42,7 @@ using namespace rovermap;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 using Poses = std::vector<Eigen::Isometry3d>;
 
 // One method's chained trajectory and per-frame times (frame 0 registers nothing: no time).
@@ -60,9 +62,6 @@ struct Sequence {
   Poses odometry, truth;
 };
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 Sequence Simulate(const std::string& name, const fs::path& dir, const sim::SimOptions& o) {
   sim::Simulator(o).WriteSequence(dir, {});

@@ -17,6 +17,7 @@
 
 #include "bench/BenchUtil.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
@@ -29,10 +30,8 @@ using namespace rovermap;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using rovermap::core::MsBetween;
 
-double MsBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 }  // namespace
 

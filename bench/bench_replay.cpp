@@ -19,6 +19,7 @@
 
 #include "bench/BenchUtil.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReadAhead.hpp"
@@ -30,10 +31,8 @@ using namespace rovermap;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // Resident set size now [MB] (/proc/self/statm: pages).
 double RssMb() {

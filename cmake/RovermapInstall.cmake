@@ -37,6 +37,10 @@ foreach(module IN LISTS ROVERMAP_LIBRARY_MODULES)
   string(APPEND rovermap_pc_libs " -lrovermap_${module}")
 endforeach()
 
+# core/ is header-only (units, the stopwatch): headers of every module may include it.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/core/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rovermap/core
+  FILES_MATCHING PATTERN "*.hpp")
+
 install(TARGETS rovermap RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The program behind every subcommand but a plain `register` (apps/Launcher.cpp finds it here).
 install(TARGETS rovermap_full RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR}/rovermap)

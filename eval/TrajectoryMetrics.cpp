@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 
 #include <Eigen/SVD>
@@ -12,7 +13,7 @@ namespace rovermap::eval {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+using core::kRadToDeg;
 
 std::vector<Eigen::Vector3d> Positions(const std::vector<Eigen::Isometry3d>& poses) {
   std::vector<Eigen::Vector3d> positions;

@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/Units.hpp"
+
 namespace rovermap::io {
 
 /// R = Rz(yaw)·Ry(pitch)·Rx(roll), angles in radians: the one roll-pitch-yaw convention of
@@ -23,7 +25,7 @@ inline Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy_rad) {
 
 /// The same, angles in degrees.
 inline Eigen::Matrix3d RotationFromRpyDeg(double roll_deg, double pitch_deg, double yaw_deg) {
-  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+  using core::kDegToRad;
   return RotationFromRpy(roll_deg * kDegToRad, pitch_deg * kDegToRad, yaw_deg * kDegToRad);
 }
 

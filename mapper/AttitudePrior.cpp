@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "mapper/AttitudePrior.hpp"
 
 #include <algorithm>
@@ -9,8 +10,8 @@
 namespace rovermap::mapper {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
+using core::kDegToRad;
+using core::kPi;
 
 double Wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
 

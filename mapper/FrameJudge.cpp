@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "mapper/FrameJudge.hpp"
 
 #include <Eigen/Geometry>
@@ -7,7 +8,7 @@
 namespace rovermap::mapper {
 namespace {
 
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+using core::kDegToRad;
 
 Judgement Reject(FallbackReason reason, const std::string& detail) {
   return {false, reason, detail};

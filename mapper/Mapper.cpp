@@ -1,3 +1,4 @@
+#include "core/Stopwatch.hpp"
 #include "mapper/Mapper.hpp"
 
 #include <chrono>
@@ -12,10 +13,8 @@ namespace rovermap::mapper {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 dem::ElevationMapOptions GridAlongProjection(dem::ElevationMapOptions options,
                                              const io::Georeference& georef) {

@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "mapper/PoseChain.hpp"
 
 #include <cmath>
@@ -8,7 +9,7 @@
 namespace rovermap::mapper {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+using core::kRadToDeg;
 // cos(pitch) below this is gimbal lock: cos(±π/2) in doubles is ~6e-17.
 constexpr double kGimbalCos = 1e-12;
 

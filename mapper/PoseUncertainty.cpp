@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "mapper/PoseUncertainty.hpp"
 
 #include <Eigen/Cholesky>
@@ -6,7 +7,7 @@
 
 namespace rovermap::mapper {
 namespace {
-constexpr double kRadToDeg = 180.0 / M_PI;
+using core::kRadToDeg;
 // χ² with 6 degrees of freedom at the probability of ±2σ in one dimension (0.9545).
 constexpr double kChi2Six2Sigma = 12.85;
 }  // namespace

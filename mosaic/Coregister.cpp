@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "mosaic/Coregister.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -15,7 +16,7 @@
 namespace rovermap::mosaic::detail {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
+using core::kRadToDeg;
 // Source cells this close to the target's edge are left out of the registration [cells].
 constexpr int kEdgeCells = 2;
 // The same on the coarse levels [blocks]: 2 blocks of 4 cells left nothing of a thin overlap.

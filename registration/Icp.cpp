@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "registration/Icp.hpp"
 
 #include <Eigen/Cholesky>
@@ -14,8 +15,8 @@
 namespace rovermap::registration {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-constexpr double kRadToDeg = 180.0 / M_PI;
+using core::kDegToRad;
+using core::kRadToDeg;
 // The seed gate's spread after a step: this many times the step (SeedGate, GateAndWeight).
 constexpr double kSeedGateStepFactor = 3.0;
 // While the seed gate is open, a query searches at least this many σ of its displacement.

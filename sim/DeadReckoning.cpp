@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "sim/DeadReckoning.hpp"
 
 #include <cmath>
@@ -6,7 +7,7 @@
 
 namespace rovermap::sim {
 namespace {
-constexpr double kDegToRad = M_PI / 180.0;
+using core::kDegToRad;
 constexpr std::uint64_t kSaltDeadReckoning = 7000;
 }  // namespace
 

@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "sim/Simulator.hpp"
 
 #include <algorithm>
@@ -16,7 +17,7 @@
 namespace rovermap::sim {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+using core::kDegToRad;
 namespace fs = std::filesystem;
 
 // Hash salts: one stream per use, so that changing one part leaves the others unchanged.

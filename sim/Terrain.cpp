@@ -1,3 +1,4 @@
+#include "core/Units.hpp"
 #include "sim/Terrain.hpp"
 
 #include <algorithm>
@@ -7,7 +8,7 @@
 namespace rovermap::sim {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+using core::kDegToRad;
 
 std::uint64_t Mix(std::uint64_t x) {  // splitmix64 finaliser
   x += 0x9e3779b97f4a7c15ULL;

@@ -1,3 +1,4 @@
+#include "core/Stopwatch.hpp"
 #include "stereo/Stereo.hpp"
 
 #include <Eigen/Cholesky>
@@ -19,10 +20,8 @@ namespace rovermap::stereo {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using core::MsSince;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 cv::Mat ToGrey(const cv::Mat& image) {
   if (image.channels() == 1) return image;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "core/Units.hpp"
 #include "mapper/AttitudePrior.hpp"
 #include "io/Rpy.hpp"
 #include "mapper/PoseChain.hpp"
@@ -13,7 +14,7 @@ using rovermap::io::RotationFromRpy;
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+constexpr double kDeg = rovermap::core::kDegToRad;
 
 Eigen::Isometry3d Pose(double roll_deg, double pitch_deg, double yaw_deg) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/Units.hpp"
 #include "tests/support/ScratchDir.hpp"
 #include "eval/TrajectoryIo.hpp"
 #include "eval/TrajectoryMetrics.hpp"
@@ -16,7 +17,7 @@ namespace rovermap::eval {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = rovermap::core::kPi;
 
 Eigen::Isometry3d Pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

@@ -12,13 +12,14 @@
 #include <cmath>
 #include <random>
 
+#include "core/Units.hpp"
 #include "registration/Icp.hpp"
 
 using namespace rovermap::registration;
 
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = rovermap::core::kDegToRad;
 constexpr double kWallStart_m = 12.0;  // nearer, the road alone: it holds no heading
 
 // Sensor-frame (x forward, y left, z up; sensor 1.5 m above the road) samples of the canyon as

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/Units.hpp"
 #include "io/Rpy.hpp"
 #include "mapper/PoseChain.hpp"
 
@@ -18,8 +19,8 @@ using rovermap::io::RotationFromRpy;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+constexpr double kPi = rovermap::core::kPi;
+constexpr double kDeg = rovermap::core::kDegToRad;
 
 Eigen::Isometry3d MakePose(const Eigen::Vector3d& rpy_rad, const Eigen::Vector3d& t) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

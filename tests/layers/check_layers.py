@@ -21,6 +21,7 @@ import tempfile
 
 # Lowest first; the order follows target_link_libraries in each module's CMakeLists.txt.
 LAYERS = [
+    ["core"],                                  # header-only: units, the stopwatch
     ["registration", "dem"],                   # the matcher; the maps (Eigen, OctoMap)
     ["io", "stereo"],                          # files and formats; correlation stereo
     ["eval", "sim", "mosaic", "campaign"],     # metrics, simulator, mosaics, campaigns
