@@ -16,10 +16,10 @@
 #include "config/Config.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
 #include "mapper/ReadAhead.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
 
 namespace rovermap::apps {
 namespace {

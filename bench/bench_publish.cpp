@@ -18,9 +18,9 @@
 #include "bench/BenchUtil.hpp"
 #include "config/Config.hpp"
 #include "io/Sequence.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/Outputs.hpp"
 #include "sim/Simulator.hpp"
 
 namespace fs = std::filesystem;

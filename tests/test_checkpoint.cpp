@@ -1,4 +1,4 @@
-// mapper/Checkpoint: a snapshot plus journal restores a Mapper to the very state the
+// service/Checkpoint: a snapshot plus journal restores a Mapper to the very state the
 // interrupted one had (poses, DEM cells, OctoMap), a torn journal record is dropped and the
 // journal goes on after the last good one, and damaged or foreign checkpoints are refused.
 #include <gtest/gtest.h>
@@ -10,9 +10,9 @@
 #include <sstream>
 
 #include "config/Config.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ServeOptions.hpp"
+#include "service/Checkpoint.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;

@@ -9,12 +9,12 @@
 
 #include "io/Sequence.hpp"
 #include "mapper/Degeneracy.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
 #include "python/src/Bindings.hpp"
 #include "python/src/Convert.hpp"
 #include "python/src/Handles.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
 
 namespace rovermap::python {
 namespace {

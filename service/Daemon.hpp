@@ -1,7 +1,7 @@
 #pragma once
 // `rovermap serve` (docs/design.md §7): frames taken from an inbox as they arrive, in index order,
 // through the same Mapper as replay; the outputs of §6 published every few frames, status.json
-// after every frame, and every frame journalled (mapper/Checkpoint) before it counts as done,
+// after every frame, and every frame journalled (service/Checkpoint) before it counts as done,
 // so that a restart after `kill -9` resumes where the run stopped.
 
 #include <atomic>
@@ -16,10 +16,10 @@
 
 #include "eval/EvalOptions.hpp"
 #include "io/Inbox.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/OutputPublisher.hpp"
 #include "mapper/ServeOptions.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/OutputPublisher.hpp"
 
 namespace rovermap::mapper {
 

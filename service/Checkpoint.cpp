@@ -1,4 +1,4 @@
-#include "mapper/Checkpoint.hpp"
+#include "service/Checkpoint.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,4 +1,4 @@
-#include "mapper/DriftReport.hpp"
+#include "service/DriftReport.hpp"
 
 #include <sys/resource.h>
 

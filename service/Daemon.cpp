@@ -1,4 +1,4 @@
-#include "mapper/Daemon.hpp"
+#include "service/Daemon.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -17,8 +17,8 @@
 #include "io/DirectoryWatcher.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
-#include "mapper/DriftReport.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
 
 namespace rovermap::mapper {
 namespace {

@@ -1,4 +1,4 @@
-#include "mapper/Outputs.hpp"
+#include "service/Outputs.hpp"
 
 #include <chrono>
 #include <utility>

@@ -1,9 +1,9 @@
-#include "mapper/OutputPublisher.hpp"
+#include "service/OutputPublisher.hpp"
 
 #include <chrono>
 #include <utility>
 
-#include "mapper/Outputs.hpp"
+#include "service/Outputs.hpp"
 
 namespace rovermap::mapper {
 
