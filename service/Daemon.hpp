@@ -72,12 +72,20 @@ class Daemon {
 
  private:
   using Clock = std::chrono::steady_clock;
-  bool Step(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  using FrameFiles = std::map<std::size_t, io::InboxFrameFiles>;
+  bool Step(const FrameFiles& files);
+  /// Rejects the ready frames beyond serve.max_gap_frames. @return whether there was one.
+  bool RejectMisnumbered(const FrameFiles& files);
+  FrameFiles::const_iterator FirstReadyAfter(const FrameFiles& files, std::size_t index) const;
+  /// Whether the next frame, held up by a later ready one, has waited serve.gap_timeout_s.
+  bool GapTimedOut(const FrameFiles& files);
+  /// Declares every index before the first ready frame missing.
+  void DeclareGapMissing(const FrameFiles& files);
   void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files);
   /// A frame of which some files came, declared missing.
   void DeclareMissing(std::size_t index, const io::InboxFrameFiles& files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
-  void RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  void RejectLate(const FrameFiles& files);
   void Publish();
   void WriteStatus(const char* state, std::size_t waiting);
   void Log(const std::string& line) const {
