@@ -18,27 +18,6 @@ namespace {
   throw IoError(path.string() + ": " + what + " (" + std::strerror(err) + ")");
 }
 
-// Closes the descriptor on every exit path, including exceptions.
-class FdGuard {
- public:
-  explicit FdGuard(int fd) : fd_(fd) {}
-  ~FdGuard() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FdGuard(const FdGuard&) = delete;
-  FdGuard& operator=(const FdGuard&) = delete;
-  int Get() const { return fd_; }
-  // Closes explicitly so that a deferred write error (NFS, full disk) is seen.
-  int Close() {
-    const int rc = ::close(fd_);
-    fd_ = -1;
-    return rc;
-  }
-
- private:
-  int fd_;
-};
-
 std::string RandomSuffix() {
   static constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
   std::random_device device;
@@ -49,6 +28,31 @@ std::string RandomSuffix() {
 }
 
 }  // namespace
+
+FdGuard::~FdGuard() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+int FdGuard::Close() {
+  const int rc = ::close(fd_);
+  fd_ = -1;
+  return rc;
+}
+
+int WriteAll(int fd, std::string_view data) {
+  const char* next = data.data();
+  std::size_t left = data.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, next, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    next += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  return 0;
+}
 
 std::string ReadWholeFile(const std::filesystem::path& path) {
   FdGuard fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
@@ -101,17 +105,7 @@ std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
     ::unlink(temp.c_str());
     ThrowErrno(path, what, err);
   };
-  const char* data = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd.Get(), data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("cannot write file", errno);
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
+  if (const int err = WriteAll(fd.Get(), contents); err != 0) fail("cannot write file", err);
   // Flush before the rename so that a crash cannot leave a renamed but empty file.
   if (flush && ::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
   if (fd.Close() != 0) fail("cannot close file", errno);

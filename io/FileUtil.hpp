@@ -6,6 +6,26 @@
 
 namespace rovermap::io {
 
+/// Closes a file descriptor on every exit path, including exceptions.
+class FdGuard {
+ public:
+  explicit FdGuard(int fd) : fd_(fd) {}
+  ~FdGuard();
+  FdGuard(const FdGuard&) = delete;
+  FdGuard& operator=(const FdGuard&) = delete;
+  int Get() const { return fd_; }
+  /// Closes explicitly so that a deferred write error (NFS, full disk) is seen.
+  /// @return ::close's result.
+  int Close();
+
+ private:
+  int fd_;
+};
+
+/// Writes all of `data` to `fd`, through short writes and interrupted ones (EINTR).
+/// @return 0, or the errno of the write that failed.
+[[nodiscard]] int WriteAll(int fd, std::string_view data);
+
 /// Reads a whole file into memory (binary, unchanged bytes).
 /// Throws IoError naming the file if it is missing, a directory or unreadable.
 std::string ReadWholeFile(const std::filesystem::path& path);

@@ -266,15 +266,9 @@ struct RecordHeader {
   std::uint32_t crc = 0;
 };
 
-void WriteAll(int fd, const char* data, std::size_t size, const fs::path& path) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw io::IoError(path.string() + ": cannot write (" + std::strerror(errno) + ")");
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
+void WriteAll(int fd, std::string_view data, const fs::path& path) {
+  if (const int err = io::WriteAll(fd, data); err != 0) {
+    throw io::IoError(path.string() + ": cannot write (" + std::strerror(err) + ")");
   }
 }
 
@@ -539,30 +533,28 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
   header.crc = Crc32(w.data());
 
   const fs::path journal = directory_ / kJournalName;
-  const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
-  if (fd < 0) throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const io::FdGuard fd(::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666));
+  if (fd.Get() < 0) {
+    throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  }
   struct stat before {};
-  if (::fstat(fd, &before) != 0) {
-    const int err = errno;
-    ::close(fd);
-    throw io::IoError(journal.string() + ": cannot stat (" + std::strerror(err) + ")");
+  if (::fstat(fd.Get(), &before) != 0) {
+    throw io::IoError(journal.string() + ": cannot stat (" + std::strerror(errno) + ")");
   }
   try {
-    WriteAll(fd, reinterpret_cast<const char*>(&header), sizeof(header), journal);
+    WriteAll(fd.Get(), {reinterpret_cast<const char*>(&header), sizeof(header)}, journal);
     Fault("journal:partial");
-    WriteAll(fd, w.data().data(), w.data().size(), journal);
-    if (::fdatasync(fd) != 0) {
+    WriteAll(fd.Get(), w.data(), journal);
+    if (::fdatasync(fd.Get()) != 0) {
       throw io::IoError(journal.string() + ": cannot flush (" + std::strerror(errno) + ")");
     }
   } catch (...) {
     // A record cut short (full disk, file-size limit) is cut off: left there, it would hide
     // every record appended after it from Restore, which stops at the first damaged one (if
     // this fails too, Restore still drops it as the last record).
-    [[maybe_unused]] const int cut = ::ftruncate(fd, before.st_size);
-    ::close(fd);
+    [[maybe_unused]] const int cut = ::ftruncate(fd.Get(), before.st_size);
     throw;
   }
-  ::close(fd);
   ++journal_records_;
 }
 
