@@ -20,6 +20,7 @@
 #include "mapper/ReadAhead.hpp"
 #include "service/DriftReport.hpp"
 #include "service/Outputs.hpp"
+#include "service/StatusLine.hpp"
 
 namespace rovermap::apps {
 namespace {
@@ -42,13 +43,7 @@ class Progress {
     std::ostringstream line;
     line << "replay: frame " << r.index + 1 << "/" << total_ << " " << std::fixed
          << std::setprecision(1) << fps << " frames/s, ETA " << std::setprecision(0) << eta_s
-         << " s, " << mapper::ToString(r.status);
-    if (r.fallback_reason != mapper::FallbackReason::kNone &&
-        r.fallback_reason != mapper::FallbackReason::kFirstFrame) {
-      line << " (" << mapper::ToString(r.fallback_reason);
-      if (!r.detail.empty()) line << ": " << r.detail;
-      line << ")";
-    }
+         << " s, " << mapper::StatusLine(r);
     if (tty_) {
       std::cerr << "\r" << std::left << std::setw(static_cast<int>(width_)) << line.str()
                 << std::flush;

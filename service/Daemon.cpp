@@ -19,6 +19,7 @@
 #include "io/IoError.hpp"
 #include "service/DriftReport.hpp"
 #include "service/Outputs.hpp"
+#include "service/StatusLine.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -338,13 +339,7 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   ++processed_;
   last_frame_time_ = UtcNow();
   std::ostringstream line;
-  line << "serve: frame " << result->index << " " << ToString(result->status);
-  if (result->fallback_reason != FallbackReason::kNone &&
-      result->fallback_reason != FallbackReason::kFirstFrame) {
-    line << " (" << ToString(result->fallback_reason);
-    if (!result->detail.empty()) line << ": " << result->detail;
-    line << ")";
-  }
+  line << "serve: frame " << result->index << " " << StatusLine(*result);
   line << std::fixed << std::setprecision(0) << ", " << result->time.load_ms + result->time.total_ms
        << " ms, " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
   Log(line.str());
