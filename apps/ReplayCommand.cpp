@@ -14,6 +14,7 @@
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "io/FileUtil.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
 #include "mapper/Mapper.hpp"
@@ -119,6 +120,9 @@ int RunReplay(const ReplayArgs& args) {
   const config::Config cfg = LoadConfigArgs(args.config);
   const std::filesystem::path out(args.out);
   CheckOutputDirectory(out, args.force, "overwrite its outputs");
+  for (const std::filesystem::path& temp : io::RemoveTemporaryFiles(out)) {
+    std::cerr << "replay: removed " << temp.string() << ", left by an interrupted write\n";
+  }
   // Opening validates the whole recording (calibration, poses, frame files) before any output.
   const std::unique_ptr<io::FrameSource> source = OpenRecording(args.sequence, cfg, "replay");
   std::unique_ptr<mapper::Mapper> mapper;

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rovermap::io {
 
@@ -51,5 +52,14 @@ void SyncDirectory(const std::filesystem::path& directory);
 /// Renames a finished temporary file over `path` (the last step of every atomic write).
 /// On failure the temporary is removed and IoError (naming `path`) is thrown.
 void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path);
+
+/// Whether `name` is one of WriteTemporaryFile's temporaries: `<file>.tmp-XXXXXX`, six of
+/// [a-z0-9] after ".tmp-".
+bool IsTemporaryFileName(std::string_view name);
+
+/// Removes the temporaries (IsTemporaryFileName) directly in `directory`: those a killed writer
+/// left, never renamed. Only call it while no other writer works there.
+/// @return the files removed, sorted; none when `directory` does not exist or cannot be read.
+std::vector<std::filesystem::path> RemoveTemporaryFiles(const std::filesystem::path& directory);
 
 }  // namespace rovermap::io

@@ -68,6 +68,10 @@ Daemon::Daemon(DaemonSetup setup) : setup_(std::move(setup)), inbox_(setup_.inbo
   if (::ftruncate(lock_fd_, 0) != 0 || ::pwrite(lock_fd_, pid.data(), pid.size(), 0) < 0) {
     throw io::IoError(lock.string() + ": cannot write the pid (" + std::strerror(errno) + ")");
   }
+  // With the lock held no other daemon writes here: temporaries are a killed publication's.
+  for (const fs::path& temp : io::RemoveTemporaryFiles(setup_.out)) {
+    Log("serve: removed " + temp.string() + ", left by an interrupted publication");
+  }
 }
 
 Daemon::~Daemon() {

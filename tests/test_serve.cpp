@@ -439,6 +439,32 @@ TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
   }
 }
 
+// A kill -9 during a publication leaves its temporaries (<file>.tmp-XXXXXX) in OUT: the next
+// start removes them, says so, and leaves every other file there as it was.
+TEST_F(Serve, TemporariesOfAKilledPublicationAreRemovedAtTheNextStart) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 2, "inbox");
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out / "dir.tmp-abc123");
+  Drop(out / "dem.tif.tmp-ab12cd", "partial");
+  Drop(out / "summary.json.tmp-0z9y8x", "{");
+  Drop(out / "keep.txt", "x");
+  Drop(out / "notes.tmp-abc", "short suffix");
+  Drop(out / "notes.tmp-ABC123", "capitals");
+  const pid_t pid = Start(inbox, out, "log");
+  ASSERT_FALSE(WaitForNext(out, 2).is_null()) << Slurp(dir_ / "log");
+  Stop(pid);
+  const std::string log = Slurp(dir_ / "log");
+  for (const char* name : {"dem.tif.tmp-ab12cd", "summary.json.tmp-0z9y8x"}) {
+    EXPECT_FALSE(fs::exists(out / name)) << name;
+    EXPECT_NE(log.find("serve: removed " + (out / name).string()), std::string::npos) << log;
+  }
+  EXPECT_EQ(Slurp(out / "keep.txt"), "x");
+  EXPECT_EQ(Slurp(out / "notes.tmp-abc"), "short suffix");
+  EXPECT_EQ(Slurp(out / "notes.tmp-ABC123"), "capitals");
+  EXPECT_TRUE(fs::is_directory(out / "dir.tmp-abc123"));
+  EXPECT_EQ(CountLines(log, "serve: removed "), 2) << log;
+}
+
 TEST_F(Serve, SigtermWhileWaitingForTheSequenceExitsZero) {
   const pid_t pid = Start(dir_ / "empty-inbox", dir_ / "out", "log");
   // Signalled only once it says it waits: a fixed 300 ms was, on a loaded machine, before the
