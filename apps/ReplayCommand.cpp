@@ -15,19 +15,20 @@
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
 #include "core/Stopwatch.hpp"
+#include "io/FileUtil.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
 #include "mapper/ReadAhead.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
+#include "service/StatusLine.hpp"
 
 namespace rovermap::apps {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using core::MsSince;
-
 
 // Progress on stderr: a rewritten line on a terminal, one line per frame otherwise.
 class Progress {
@@ -41,13 +42,7 @@ class Progress {
     std::ostringstream line;
     line << "replay: frame " << r.index + 1 << "/" << total_ << " " << std::fixed
          << std::setprecision(1) << fps << " frames/s, ETA " << std::setprecision(0) << eta_s
-         << " s, " << mapper::ToString(r.status);
-    if (r.fallback_reason != mapper::FallbackReason::kNone &&
-        r.fallback_reason != mapper::FallbackReason::kFirstFrame) {
-      line << " (" << mapper::ToString(r.fallback_reason);
-      if (!r.detail.empty()) line << ": " << r.detail;
-      line << ")";
-    }
+         << " s, " << mapper::StatusLine(r);
     if (tty_) {
       std::cerr << "\r" << std::left << std::setw(static_cast<int>(width_)) << line.str()
                 << std::flush;
@@ -123,6 +118,9 @@ int RunReplay(const ReplayArgs& args) {
   const config::Config cfg = LoadConfigArgs(args.config);
   const std::filesystem::path out(args.out);
   CheckOutputDirectory(out, args.force, "overwrite its outputs");
+  for (const std::filesystem::path& temp : io::RemoveTemporaryFiles(out)) {
+    std::cerr << "replay: removed " << temp.string() << ", left by an interrupted write\n";
+  }
   // Opening validates the whole recording (calibration, poses, frame files) before any output.
   const std::unique_ptr<io::FrameSource> source = OpenRecording(args.sequence, cfg, "replay");
   std::unique_ptr<mapper::Mapper> mapper;

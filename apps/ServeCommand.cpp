@@ -13,8 +13,8 @@
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
 #include "io/IoError.hpp"
-#include "mapper/Checkpoint.hpp"
-#include "mapper/Daemon.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/Daemon.hpp"
 
 namespace rovermap::apps {
 namespace {
@@ -39,7 +39,7 @@ void InstallSignalHandlers() {
 
 // Test hook: ROVERMAP_FAULT_KILL="POINT[:N]" kills the process (SIGKILL, as a power loss would
 // stop it) the N-th time (default 1st) it passes POINT: "frame:processed", "journal:partial",
-// "checkpoint:written", "checkpoint:renamed", "publish:dem.tif", ... (mapper/Daemon.hpp).
+// "checkpoint:written", "checkpoint:renamed", "publish:dem.tif", ... (service/Daemon.hpp).
 mapper::FaultHook FaultFromEnvironment() {
   const char* spec = std::getenv("ROVERMAP_FAULT_KILL");
   if (spec == nullptr || *spec == '\0') return {};

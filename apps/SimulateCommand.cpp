@@ -10,6 +10,7 @@
 
 #include "apps/Commands.hpp"
 #include "config/Config.hpp"
+#include "core/Stopwatch.hpp"
 #include "sim/Simulator.hpp"
 #include "sim/TerrainGeoTiff.hpp"
 
@@ -60,8 +61,7 @@ int RunSimulate(const SimulateArgs& args) {
       });
   // The true terrain, on the DEM's grid (dem.cell_size_m) and with dem.tif's conventions.
   const io::GeoTiffInfo tif = sim::WriteTerrainGeoTiff(out / "terrain.tif", *simulator, cfg.dem);
-  const double total_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double total_ms = core::MsSince(start);
   const nlohmann::json summary = {
       {"out", args.out},
       {"frames", r.frames},

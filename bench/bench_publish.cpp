@@ -19,9 +19,9 @@
 #include "config/Config.hpp"
 #include "core/Stopwatch.hpp"
 #include "io/Sequence.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/Outputs.hpp"
 #include "sim/Simulator.hpp"
 
 namespace fs = std::filesystem;
@@ -31,7 +31,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using rovermap::core::MsBetween;
-
 
 }  // namespace
 

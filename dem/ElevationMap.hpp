@@ -286,7 +286,7 @@ class ElevationMap {
   const CellBounds& bounds() const { return bounds_; }
   /// Bytes held by the tiles' layers (not the hash table overhead).
   std::size_t MemoryBytes() const;
-  /// Restoring a saved map (mapper/Checkpoint): replaces the tile at `tile_index` by `cells`
+  /// Restoring a saved map (service/Checkpoint): replaces the tile at `tile_index` by `cells`
   /// (tile_cells² records as Tile stores them; its filled count is recounted).
   /// @throw std::invalid_argument if `cells` has the wrong size.
   void RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells);

@@ -45,7 +45,7 @@ class OctoMapFusion {
   /// InsertFrame.
   const octomap::OcTree* tree() const { return tree_.get(); }
 
-  /// The whole state for a checkpoint (mapper/Checkpoint): the tree with its log-odds (OctoMap's
+  /// The whole state for a checkpoint (service/Checkpoint): the tree with its log-odds (OctoMap's
   /// .ot format), after two words that earlier versions used for an inner-update schedule and
   /// that are now zero. Nothing when disabled.
   /// @return false if the stream failed.

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -20,32 +21,15 @@ namespace {
   throw IoError(path.string() + ": " + what + " (" + std::strerror(err) + ")");
 }
 
-// Closes the descriptor on every exit path, including exceptions.
-class FdGuard {
- public:
-  explicit FdGuard(int fd) : fd_(fd) {}
-  ~FdGuard() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FdGuard(const FdGuard&) = delete;
-  FdGuard& operator=(const FdGuard&) = delete;
-  int Get() const { return fd_; }
-  // Closes explicitly so that a deferred write error (NFS, full disk) is seen.
-  int Close() {
-    const int rc = ::close(fd_);
-    fd_ = -1;
-    return rc;
-  }
-
- private:
-  int fd_;
-};
+// A temporary's name: the file's, then ".tmp-" and kSuffixLength characters of kAlphabet.
+constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+constexpr std::string_view kTemporaryInfix = ".tmp-";
+constexpr std::size_t kSuffixLength = 6;
 
 std::string RandomSuffix() {
-  static constexpr char kAlphabet[] = "abcdefghijklmnopqrstuvwxyz0123456789";
   std::random_device device;
   std::uniform_int_distribution<int> pick(0, static_cast<int>(sizeof(kAlphabet)) - 2);
-  std::string suffix(6, 'x');
+  std::string suffix(kSuffixLength, 'x');
   for (char& c : suffix) c = kAlphabet[pick(device)];
   return suffix;
 }
@@ -59,6 +43,31 @@ std::optional<std::string> ReadText(const std::filesystem::path& path) {
   text << stream.rdbuf();
   if (stream.bad()) return std::nullopt;
   return text.str();
+}
+
+FdGuard::~FdGuard() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+int FdGuard::Close() {
+  const int rc = ::close(fd_);
+  fd_ = -1;
+  return rc;
+}
+
+int WriteAll(int fd, std::string_view data) {
+  const char* next = data.data();
+  std::size_t left = data.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, next, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    next += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  return 0;
 }
 
 std::string ReadWholeFile(const std::filesystem::path& path) {
@@ -99,7 +108,7 @@ std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
   int raw_fd = -1;
   for (int attempt = 0; attempt < 100 && raw_fd < 0; ++attempt) {
     temp = path;
-    temp += ".tmp-" + RandomSuffix();
+    temp += std::string(kTemporaryInfix) + RandomSuffix();
     // O_EXCL: never clobber another writer's temporary; 0666 lets the umask decide.
     raw_fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (raw_fd < 0 && errno != EEXIST) ThrowErrno(path, "cannot create temporary file", errno);
@@ -112,17 +121,7 @@ std::filesystem::path WriteTemporaryFile(const std::filesystem::path& path,
     ::unlink(temp.c_str());
     ThrowErrno(path, what, err);
   };
-  const char* data = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd.Get(), data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("cannot write file", errno);
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
+  if (const int err = WriteAll(fd.Get(), contents); err != 0) fail("cannot write file", err);
   // Flush before the rename so that a crash cannot leave a renamed but empty file.
   if (flush && ::fsync(fd.Get()) != 0) fail("cannot flush file", errno);
   if (fd.Close() != 0) fail("cannot close file", errno);
@@ -143,6 +142,28 @@ void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesyste
     throw IoError(path.string() + ": cannot rename temporary file into place (" + ec.message() +
                   ")");
   }
+}
+
+bool IsTemporaryFileName(std::string_view name) {
+  const std::size_t tail = kTemporaryInfix.size() + kSuffixLength;
+  if (name.size() <= tail) return false;  // a temporary of a file with a name
+  const std::string_view suffix = name.substr(name.size() - kSuffixLength);
+  return name.substr(name.size() - tail, kTemporaryInfix.size()) == kTemporaryInfix &&
+         suffix.find_first_not_of(std::string_view(kAlphabet, sizeof(kAlphabet) - 1)) ==
+             std::string_view::npos;
+}
+
+std::vector<std::filesystem::path> RemoveTemporaryFiles(const std::filesystem::path& directory) {
+  std::vector<std::filesystem::path> removed;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
+    std::error_code entry_ec;
+    if (!entry.is_regular_file(entry_ec) || !IsTemporaryFileName(entry.path().filename().string()))
+      continue;
+    if (std::filesystem::remove(entry.path(), entry_ec)) removed.push_back(entry.path());
+  }
+  std::sort(removed.begin(), removed.end());
+  return removed;
 }
 
 }  // namespace rovermap::io

@@ -4,8 +4,29 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rovermap::io {
+
+/// Closes a file descriptor on every exit path, including exceptions.
+class FdGuard {
+ public:
+  explicit FdGuard(int fd) : fd_(fd) {}
+  ~FdGuard();
+  FdGuard(const FdGuard&) = delete;
+  FdGuard& operator=(const FdGuard&) = delete;
+  int Get() const { return fd_; }
+  /// Closes explicitly so that a deferred write error (NFS, full disk) is seen.
+  /// @return ::close's result.
+  int Close();
+
+ private:
+  int fd_;
+};
+
+/// Writes all of `data` to `fd`, through short writes and interrupted ones (EINTR).
+/// @return 0, or the errno of the write that failed.
+[[nodiscard]] int WriteAll(int fd, std::string_view data);
 
 /// Reads a whole file into memory (binary, unchanged bytes).
 /// Throws IoError naming the file if it is missing, a directory or unreadable.
@@ -36,5 +57,14 @@ void SyncDirectory(const std::filesystem::path& directory);
 /// Renames a finished temporary file over `path` (the last step of every atomic write).
 /// On failure the temporary is removed and IoError (naming `path`) is thrown.
 void CommitTemporaryFile(const std::filesystem::path& temp, const std::filesystem::path& path);
+
+/// Whether `name` is one of WriteTemporaryFile's temporaries: `<file>.tmp-XXXXXX`, six of
+/// [a-z0-9] after ".tmp-".
+bool IsTemporaryFileName(std::string_view name);
+
+/// Removes the temporaries (IsTemporaryFileName) directly in `directory`: those a killed writer
+/// left, never renamed. Only call it while no other writer works there.
+/// @return the files removed, sorted; none when `directory` does not exist or cannot be read.
+std::vector<std::filesystem::path> RemoveTemporaryFiles(const std::filesystem::path& directory);
 
 }  // namespace rovermap::io

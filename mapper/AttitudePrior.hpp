@@ -25,7 +25,7 @@ class AttitudePrior {
 
   /// Current variance of the chained roll and pitch [rad²].
   double variance() const { return variance_; }
-  /// Restores the variance a saved prior had (mapper/Checkpoint).
+  /// Restores the variance a saved prior had (service/Checkpoint).
   void RestoreVariance(double variance) { variance_ = variance; }
 
  private:

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <utility>
 
+#include "core/Stopwatch.hpp"
 #include "stereo/Stereo.hpp"
 
 namespace rovermap::mapper {
@@ -70,8 +71,7 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     const auto start = std::chrono::steady_clock::now();
     stereo::StereoPointsResult points =
         stereo::ComputePoints(frame.left, frame.right, camera, setup.T_body_sensor, setup.stereo);
-    out.stereo_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    out.stereo_ms = core::MsSince(start);
     if (points.status != stereo::StereoStatus::kOk) {
       out.reason = AboutFile(frame, "stereo: " + points.message);
       return out;

@@ -33,7 +33,7 @@ class LocalMap {
       const registration::RegistrationOptions& options) const;
 
   std::size_t frames() const { return frames_.size(); }
-  /// The held frames (world frame), oldest first, and their restoration (mapper/Checkpoint).
+  /// The held frames (world frame), oldest first, and their restoration (service/Checkpoint).
   const std::deque<registration::PointCloud>& clouds() const { return frames_; }
   void Restore(std::vector<registration::PointCloud> clouds) {
     frames_.assign(std::make_move_iterator(clouds.begin()), std::make_move_iterator(clouds.end()));

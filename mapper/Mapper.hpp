@@ -154,7 +154,7 @@ class Mapper {
                         const std::string& detail,
                         const std::optional<Eigen::Isometry3d>& T_world_body_truth = {});
 
-  /// Re-applies a frame processed before (a checkpoint's journal, mapper/Checkpoint): chains
+  /// Re-applies a frame processed before (a checkpoint's journal, service/Checkpoint): chains
   /// `recorded`'s increment and fuses the frame's points (read from `frame`, which a bad frame
   /// does not need: pass nullptr) without registering; the state then equals the one
   /// ProcessFrame left, and results() ends with `recorded`.
@@ -180,7 +180,7 @@ class Mapper {
 
  private:
   struct Registered;               // the outcome of register + judge + blend
-  friend struct CheckpointAccess;  // mapper/Checkpoint: the state to and from disk
+  friend struct CheckpointAccess;  // service/Checkpoint: the state to and from disk
   FrameResult Process(const io::Frame& frame, PreparedFrame prepared, double load_ms,
                       const FrameResult* recorded);
   static Registered Recorded(const FrameResult& recorded);

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <utility>
 
+#include "core/Stopwatch.hpp"
 #include "dem/OcTreeBytes.hpp"
 
 namespace rovermap::mapper {
@@ -113,8 +114,7 @@ void OctoMapWorker::Loop() {
     changed_.notify_all();  // a producer may queue the next frame meanwhile
     const auto start = std::chrono::steady_clock::now();
     if (!job.points.empty()) fusion_.InsertFrame(job.points, job.origin);
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms = core::MsSince(start);
     Serialise(&job.serialise);
     {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -94,7 +94,7 @@ class PoseChain {
   /// @throw std::invalid_argument if `T_world_body0_odom` is not IsFiniteRigid.
   explicit PoseChain(const Eigen::Isometry3d& T_world_body0_odom);
 
-  /// A chain as saved (mapper/Checkpoint): every step Add returned, frame 0 first; the
+  /// A chain as saved (service/Checkpoint): every step Add returned, frame 0 first; the
   /// counters are recomputed as Add kept them. @throw std::invalid_argument if `steps` is empty.
   explicit PoseChain(const std::vector<ChainStep>& steps);
 

@@ -4,6 +4,7 @@
 #include <string>
 #include <utility>
 
+#include "core/Stopwatch.hpp"
 #include "io/IoError.hpp"
 
 namespace rovermap::mapper {
@@ -33,8 +34,7 @@ ReadAhead::Item ReadAhead::Fetch(std::size_t index) {
     item.error = e.what();  // the source has moved past it
     return item;
   }
-  item.load_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  item.load_ms = core::MsSince(start);
   item.prepared = mapper_->Prepare(frame);
   item.frame = std::move(frame);
   return item;

@@ -1,4 +1,3 @@
-#include "core/Units.hpp"
 #include "sim/Simulator.hpp"
 
 #include <algorithm>
@@ -9,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/Stopwatch.hpp"
+#include "core/Units.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
@@ -304,8 +305,7 @@ SimulateResult Simulator::WriteSequence(
     io::WriteFrameData(stem, info, frame);
     if (progress) progress(k + 1, truth_.size());
   }
-  result.render_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  result.render_ms = core::MsSince(start);
   io::WriteTum(dir / "groundtruth.tum", truth_);
   io::WriteTum(dir / "odometry.tum", odometry_);
 

@@ -1,18 +1,21 @@
-// mapper/Checkpoint: a snapshot plus journal restores a Mapper to the very state the
+// service/Checkpoint: a snapshot plus journal restores a Mapper to the very state the
 // interrupted one had (poses, DEM cells, OctoMap), a torn journal record is dropped and the
-// journal goes on after the last good one, and damaged or foreign checkpoints are refused.
+// journal goes on after the last good one, damaged or foreign checkpoints are refused, and a
+// FrameResult comes back from its encoding with every field.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 
 #include "config/Config.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ServeOptions.hpp"
+#include "service/Checkpoint.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
@@ -200,6 +203,127 @@ TEST(SnapshotDue, WaitsForItsShareOfTheProcessingTimeUpToTheLimit) {
   o.checkpoint_share = 0.0;
   EXPECT_FALSE(mapper::SnapshotDue(o, 9, 1.0, 1e6));
   EXPECT_TRUE(mapper::SnapshotDue(o, 10, 1.0, 1e6));
+}
+
+// Every field set away from its default, so that a field the encoding leaves out (or reads
+// into another) shows.
+mapper::FrameResult EveryFieldSet() {
+  int n = 0;
+  const auto pose = [&n] {
+    ++n;
+    return Eigen::Isometry3d(
+        Eigen::Translation3d(0.5 * n, -1.25 * n, 2.0 + n) *
+        Eigen::AngleAxisd(0.1 * n, Eigen::Vector3d(1.0, 2.0, 3.0 + n).normalized()));
+  };
+  const auto matrix = [&n] {
+    mapper::Matrix6d m;
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 6; ++c) m(r, c) = 0.01 * (++n) - 0.3 * r + c;
+    return m;
+  };
+  mapper::FrameResult f;
+  f.index = 41;
+  f.timestamp = 1234.5625;
+  f.status = mapper::FrameStatus::kPartial;
+  f.fallback_reason = mapper::FallbackReason::kHighRms;
+  f.detail = "rms 0.4 m > 0.2 m";
+  f.step.index = 41;
+  f.step.T_world_body = pose();
+  f.step.T_world_body_odom = pose();
+  f.step.odom_increment = pose();
+  f.step.used_increment = pose();
+  f.step.increment_correction = pose();
+  f.step.cumulative_correction = pose();
+  f.step.fallback = true;
+  f.step.covariance = matrix();
+  f.step.systematic_cross = matrix();
+  f.T_world_body_truth = pose();
+  f.odometry_directions = 0b101101;
+  f.matcher_status = "converged";
+  f.iterations = 17;
+  f.inliers = 9001;
+  f.inlier_ratio = 0.875;
+  f.rms_m = 0.0321;
+  f.conditioning = 42.5;
+  f.points = 12345;
+  f.outliers_removed = 67;
+  f.dropped_nonfinite = 8;
+  f.dem = {101, 102, 103, 104, 105, 106, 107, 108, 109};
+  f.time = {1.5, 2.5, 3.5, 4.5, 5.5, 6.5, 7.5};
+  f.T_world_body_registered = pose();
+  f.increment_covariance = matrix();
+  f.reference_distance_m = 3.75;
+  f.odometry_bias.bias << 0.001, -0.002, 0.003, -0.04, 0.05, -0.06;
+  f.odometry_bias.information = matrix();
+  return f;
+}
+
+TEST(FrameResultEncoding, RoundTripGivesBackEveryField) {
+  const mapper::FrameResult a = EveryFieldSet();
+  const std::string bytes = mapper::EncodeFrameResult(a);
+  const mapper::FrameResult b = mapper::DecodeFrameResult(bytes);
+  const auto same_pose = [](const Eigen::Isometry3d& x, const Eigen::Isometry3d& y) {
+    return x.matrix() == y.matrix();
+  };
+  EXPECT_EQ(a.index, b.index);
+  EXPECT_EQ(a.timestamp, b.timestamp);
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.fallback_reason, b.fallback_reason);
+  EXPECT_EQ(a.detail, b.detail);
+  EXPECT_EQ(a.step.index, b.step.index);
+  EXPECT_TRUE(same_pose(a.step.T_world_body, b.step.T_world_body));
+  EXPECT_TRUE(same_pose(a.step.T_world_body_odom, b.step.T_world_body_odom));
+  EXPECT_TRUE(same_pose(a.step.odom_increment, b.step.odom_increment));
+  EXPECT_TRUE(same_pose(a.step.used_increment, b.step.used_increment));
+  EXPECT_TRUE(same_pose(a.step.increment_correction, b.step.increment_correction));
+  EXPECT_TRUE(same_pose(a.step.cumulative_correction, b.step.cumulative_correction));
+  EXPECT_EQ(a.step.fallback, b.step.fallback);
+  EXPECT_EQ(a.step.covariance, b.step.covariance);
+  EXPECT_EQ(a.step.systematic_cross, b.step.systematic_cross);
+  ASSERT_TRUE(b.T_world_body_truth.has_value());
+  EXPECT_TRUE(same_pose(*a.T_world_body_truth, *b.T_world_body_truth));
+  EXPECT_EQ(a.odometry_directions, b.odometry_directions);
+  EXPECT_EQ(a.matcher_status, b.matcher_status);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_EQ(a.inlier_ratio, b.inlier_ratio);
+  EXPECT_EQ(a.rms_m, b.rms_m);
+  EXPECT_EQ(a.conditioning, b.conditioning);
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.outliers_removed, b.outliers_removed);
+  EXPECT_EQ(a.dropped_nonfinite, b.dropped_nonfinite);
+  EXPECT_EQ(a.dem.points, b.dem.points);
+  EXPECT_EQ(a.dem.fused, b.dem.fused);
+  EXPECT_EQ(a.dem.candidate, b.dem.candidate);
+  EXPECT_EQ(a.dem.swapped, b.dem.swapped);
+  EXPECT_EQ(a.dem.rejected_outliers, b.dem.rejected_outliers);
+  EXPECT_EQ(a.dem.dropped_nonfinite, b.dem.dropped_nonfinite);
+  EXPECT_EQ(a.dem.dropped_out_of_grid, b.dem.dropped_out_of_grid);
+  EXPECT_EQ(a.dem.dropped_imprecise, b.dem.dropped_imprecise);
+  EXPECT_EQ(a.dem.new_tiles, b.dem.new_tiles);
+  EXPECT_EQ(a.time.load_ms, b.time.load_ms);
+  EXPECT_EQ(a.time.stereo_ms, b.time.stereo_ms);
+  EXPECT_EQ(a.time.prepare_ms, b.time.prepare_ms);
+  EXPECT_EQ(a.time.register_ms, b.time.register_ms);
+  EXPECT_EQ(a.time.fuse_dem_ms, b.time.fuse_dem_ms);
+  EXPECT_EQ(a.time.fuse_octomap_ms, b.time.fuse_octomap_ms);
+  EXPECT_EQ(a.time.total_ms, b.time.total_ms);
+  ASSERT_TRUE(b.T_world_body_registered.has_value());
+  EXPECT_TRUE(same_pose(*a.T_world_body_registered, *b.T_world_body_registered));
+  EXPECT_EQ(a.increment_covariance, b.increment_covariance);
+  EXPECT_EQ(a.reference_distance_m, b.reference_distance_m);
+  EXPECT_EQ(a.odometry_bias.bias, b.odometry_bias.bias);
+  EXPECT_EQ(a.odometry_bias.information, b.odometry_bias.information);
+  // The bytes a second encoding gives are the first's (nothing read into the wrong field).
+  EXPECT_EQ(mapper::EncodeFrameResult(b), bytes);
+  // A status or reason beyond its enumeration, and a cut encoding, are a damaged checkpoint.
+  std::string bad = bytes;
+  const std::int32_t beyond = 99;
+  std::memcpy(bad.data() + 16, &beyond, sizeof(beyond));  // after index and timestamp
+  EXPECT_THROW(mapper::DecodeFrameResult(bad), mapper::CheckpointError);
+  EXPECT_THROW(mapper::DecodeFrameResult(bytes.substr(0, bytes.size() - 1)),
+               mapper::CheckpointError);
+  EXPECT_THROW(mapper::DecodeFrameResult(bytes + "x"), mapper::CheckpointError);
 }
 
 TEST(Crc32, KnownValues) {

@@ -12,8 +12,8 @@
 #include "config/Config.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "io/Sequence.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
+#include "service/DriftReport.hpp"
 #include "sim/Simulator.hpp"
 #include "tests/support/ScratchDir.hpp"
 

@@ -20,9 +20,9 @@
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/OctoMapWorker.hpp"
-#include "mapper/OutputPublisher.hpp"
-#include "mapper/OutputState.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/OutputPublisher.hpp"
+#include "service/OutputState.hpp"
+#include "service/Outputs.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/ScratchDir.hpp"
 

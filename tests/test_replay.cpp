@@ -199,6 +199,29 @@ TEST_F(Replay, NonEmptyOutputNeedsForce) {
   EXPECT_TRUE(fs::exists(out / "keep.txt"));
 }
 
+// A write a kill interrupted leaves its temporary (<file>.tmp-XXXXXX); a replay into that
+// folder with --force removes those, says so, and leaves every other file as it was.
+TEST_F(Replay, ForceRemovesTemporariesOfAnInterruptedWriteOnly) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out / "dir.tmp-abc123");
+  Write("out/dem.tif.tmp-ab12cd", "partial");
+  Write("out/keep.txt", "x");
+  Write("out/notes.tmp-abc", "short suffix");
+  Write("out/notes.tmp-ABC123", "capitals");
+  const CommandResult r =
+      Rovermap("replay " + kTinyCloud.string() + " --out " + out.string() + " --force");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out / "dem.tif.tmp-ab12cd"));
+  EXPECT_NE(r.err.find("replay: removed " + (out / "dem.tif.tmp-ab12cd").string()),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(Slurp(out / "keep.txt"), "x");
+  EXPECT_EQ(Slurp(out / "notes.tmp-abc"), "short suffix");
+  EXPECT_EQ(Slurp(out / "notes.tmp-ABC123"), "capitals");
+  EXPECT_TRUE(fs::is_directory(out / "dir.tmp-abc123"));
+  EXPECT_TRUE(fs::exists(out / "dem.tif"));
+}
+
 TEST_F(Replay, BadSequencesStopBeforeAnyOutput) {
   struct Case {
     std::string name;

@@ -407,9 +407,9 @@ TEST_F(Serve, SecondSignalExitsAtOnceAndTheRestartStillEqualsReplay) {
   const fs::path inbox = MakeInbox(kTinyStereo, 3, "inbox");
   const fs::path out = dir_ / "out";
   // status.json after every frame, so that the signals come while frames are still queued.
-  const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1", "--set",
-                                          "serve.checkpoint_share=0", "--set",
-                                          "serve.status_interval_s=0"};
+  const std::vector<std::string> every = {"--set", "serve.checkpoint_every=1",
+                                          "--set", "serve.checkpoint_share=0",
+                                          "--set", "serve.status_interval_s=0"};
   const pid_t pid = Start(inbox, out, "log", every);
   ASSERT_FALSE(WaitForNext(out, 1).is_null()) << Slurp(dir_ / "log");
   ::kill(pid, SIGTERM);
@@ -437,6 +437,32 @@ TEST_F(Serve, FailedPublicationStopsTheDaemonNamingTheFile) {
   for (const auto& entry : fs::directory_iterator(out)) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
   }
+}
+
+// A kill -9 during a publication leaves its temporaries (<file>.tmp-XXXXXX) in OUT: the next
+// start removes them, says so, and leaves every other file there as it was.
+TEST_F(Serve, TemporariesOfAKilledPublicationAreRemovedAtTheNextStart) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 2, "inbox");
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out / "dir.tmp-abc123");
+  Drop(out / "dem.tif.tmp-ab12cd", "partial");
+  Drop(out / "summary.json.tmp-0z9y8x", "{");
+  Drop(out / "keep.txt", "x");
+  Drop(out / "notes.tmp-abc", "short suffix");
+  Drop(out / "notes.tmp-ABC123", "capitals");
+  const pid_t pid = Start(inbox, out, "log");
+  ASSERT_FALSE(WaitForNext(out, 2).is_null()) << Slurp(dir_ / "log");
+  Stop(pid);
+  const std::string log = Slurp(dir_ / "log");
+  for (const char* name : {"dem.tif.tmp-ab12cd", "summary.json.tmp-0z9y8x"}) {
+    EXPECT_FALSE(fs::exists(out / name)) << name;
+    EXPECT_NE(log.find("serve: removed " + (out / name).string()), std::string::npos) << log;
+  }
+  EXPECT_EQ(Slurp(out / "keep.txt"), "x");
+  EXPECT_EQ(Slurp(out / "notes.tmp-abc"), "short suffix");
+  EXPECT_EQ(Slurp(out / "notes.tmp-ABC123"), "capitals");
+  EXPECT_TRUE(fs::is_directory(out / "dir.tmp-abc123"));
+  EXPECT_EQ(CountLines(log, "serve: removed "), 2) << log;
 }
 
 TEST_F(Serve, SigtermWhileWaitingForTheSequenceExitsZero) {

@@ -28,9 +28,9 @@
 #include "config/Config.hpp"
 #include "io/IoError.hpp"
 #include "io/Sequence.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/Outputs.hpp"
 #include "tests/support/CommandFixture.hpp"
 
 namespace fs = std::filesystem;

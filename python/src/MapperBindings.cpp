@@ -9,12 +9,13 @@
 
 #include "io/Sequence.hpp"
 #include "mapper/Degeneracy.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/Outputs.hpp"
 #include "python/src/Bindings.hpp"
 #include "python/src/Convert.hpp"
 #include "python/src/Handles.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
+#include "service/StatusLine.hpp"
 
 namespace rovermap::python {
 namespace {
@@ -224,11 +225,7 @@ void BindMapper(py::module_& m) {
       .def_readonly("dropped_nonfinite", &FrameResult::dropped_nonfinite)
       .def_property_readonly("times", [](const FrameResult& r) { return Times(r.time); })
       .def("__repr__", [](const FrameResult& r) {
-        return "<FrameResult " + std::to_string(r.index) + " " + mapper::ToString(r.status) +
-               (r.fallback_reason == mapper::FallbackReason::kNone
-                    ? std::string()
-                    : std::string(" (") + mapper::ToString(r.fallback_reason) + ")") +
-               ">";
+        return "<FrameResult " + std::to_string(r.index) + " " + mapper::StatusLine(r) + ">";
       });
 
   py::class_<MapperHandle>(m, "Mapper",

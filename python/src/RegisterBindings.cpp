@@ -5,6 +5,7 @@
 
 #include <chrono>
 
+#include "core/Stopwatch.hpp"
 #include "python/src/Bindings.hpp"
 #include "python/src/Convert.hpp"
 #include "registration/Icp.hpp"
@@ -56,8 +57,7 @@ Registration Register(py::handle source, py::handle target, py::handle init, py:
   const registration::IndexedCloud source_index(std::move(source_cloud), cfg.registration);
   const registration::IndexedCloud target_index(std::move(target_cloud), cfg.registration);
   out.result = registration::Register(source_index, target_index, T_init, cfg.registration);
-  out.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  out.time_ms = rovermap::core::MsSince(start);
   return out;
 }
 

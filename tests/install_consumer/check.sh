@@ -30,7 +30,7 @@ cmake --install "$build" --prefix "$prefix" >"$work/install.log" ||
   { cat "$work/install.log"; fail "cmake --install"; }
 
 step "installed layout"
-modules=(config campaign mosaic mapper sim eval stereo io dem registration)
+modules=(config campaign mosaic service mapper sim eval stereo io dem registration)
 for m in "${modules[@]}"; do
   [[ -f $prefix/lib/librovermap_$m.a ]] || fail "no lib/librovermap_$m.a"
   compgen -G "$prefix/include/rovermap/$m/*.hpp" >/dev/null || fail "no include/rovermap/$m/*.hpp"

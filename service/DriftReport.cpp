@@ -1,4 +1,4 @@
-#include "mapper/DriftReport.hpp"
+#include "service/DriftReport.hpp"
 
 #include <sys/resource.h>
 
@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/Units.hpp"
 #include "eval/PlotPrimitives.hpp"
 #include "io/OctoMapIo.hpp"
 #include "mapper/Degeneracy.hpp"
@@ -17,7 +18,7 @@
 namespace rovermap::mapper {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+using core::kRadToDeg;
 
 nlohmann::json Number(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);

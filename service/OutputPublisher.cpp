@@ -1,9 +1,10 @@
-#include "mapper/OutputPublisher.hpp"
+#include "service/OutputPublisher.hpp"
 
 #include <chrono>
 #include <utility>
 
-#include "mapper/Outputs.hpp"
+#include "core/Stopwatch.hpp"
+#include "service/Outputs.hpp"
 
 namespace rovermap::mapper {
 
@@ -25,8 +26,7 @@ void OutputPublisher::Publish(std::filesystem::path out_dir, OutputState state, 
     } catch (...) {
       error_ = std::current_exception();
     }
-    last_write_ms_ =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    last_write_ms_ = core::MsSince(start);
     finished_ = true;
   });
 }

@@ -7,9 +7,9 @@
 #include <string>
 
 #include "eval/EvalOptions.hpp"
-#include "mapper/DriftReport.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/OutputState.hpp"
+#include "service/DriftReport.hpp"
+#include "service/OutputState.hpp"
 
 namespace rovermap::mapper {
 

@@ -1,4 +1,4 @@
-#include "mapper/Checkpoint.hpp"
+#include "service/Checkpoint.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -52,6 +52,17 @@ class Writer {
     Put<std::uint8_t>(T ? 1 : 0);
     if (T) Pose(*T);
   }
+  // The field operations VisitResult calls, mirrored in Reader.
+  template <typename Stored, typename Field>
+  void Value(const Field& v) {
+    Put<Stored>(static_cast<Stored>(v));
+  }
+  void Flag(bool b) { Put<std::uint8_t>(b ? 1 : 0); }
+  template <typename E>
+  void Enum(E e, E /*last*/) {
+    Put<std::int32_t>(static_cast<std::int32_t>(e));
+  }
+  void Text(const std::string& s) { String(s); }
   std::string& data() { return data_; }
 
  private:
@@ -89,6 +100,26 @@ class Reader {
     if (Get<std::uint8_t>() == 0) return std::nullopt;
     return Pose();
   }
+  // Writer's field operations, reading into the field.
+  template <typename Stored, typename Field>
+  void Value(Field& v) {
+    v = static_cast<Field>(Get<Stored>());
+  }
+  void Flag(bool& b) { b = Get<std::uint8_t>() != 0; }
+  /// An enumerator stored as int32; a value beyond [0, last] is a damaged file.
+  template <typename E>
+  void Enum(E& e, E last) {
+    const auto v = Get<std::int32_t>();
+    if (v < 0 || v > static_cast<std::int32_t>(last)) Fail();
+    e = static_cast<E>(v);
+  }
+  void Text(std::string& s) { s = String(); }
+  template <typename Derived>
+  void Matrix(Eigen::MatrixBase<Derived>& m) {
+    Matrix(&m);
+  }
+  void Pose(Eigen::Isometry3d& T) { Matrix(&T.matrix()); }
+  void OptionalPose(std::optional<Eigen::Isometry3d>& T) { T = OptionalPose(); }
   std::size_t Count(std::size_t max) {
     const auto n = Get<std::uint64_t>();
     if (n > max) Fail();
@@ -112,111 +143,64 @@ class Reader {
   std::size_t offset_ = 0;
 };
 
-void PutStep(Writer* w, const ChainStep& s) {
-  w->Put<std::uint64_t>(s.index);
-  w->Pose(s.T_world_body);
-  w->Pose(s.T_world_body_odom);
-  w->Pose(s.odom_increment);
-  w->Pose(s.used_increment);
-  w->Pose(s.increment_correction);
-  w->Pose(s.cumulative_correction);
-  w->Put<std::uint8_t>(s.fallback ? 1 : 0);
-  w->Matrix(s.covariance);
-  w->Matrix(s.systematic_cross);
+// Every field of a ChainStep and a FrameResult in the file's order, for both directions: Io is
+// Writer (with const fields) or Reader. A new field is added here, once.
+template <typename Io, typename Step>
+void VisitStep(Io& io, Step& s) {
+  io.template Value<std::uint64_t>(s.index);
+  io.Pose(s.T_world_body);
+  io.Pose(s.T_world_body_odom);
+  io.Pose(s.odom_increment);
+  io.Pose(s.used_increment);
+  io.Pose(s.increment_correction);
+  io.Pose(s.cumulative_correction);
+  io.Flag(s.fallback);
+  io.Matrix(s.covariance);
+  io.Matrix(s.systematic_cross);
 }
 
-ChainStep GetStep(Reader* r) {
-  ChainStep s;
-  s.index = r->Get<std::uint64_t>();
-  s.T_world_body = r->Pose();
-  s.T_world_body_odom = r->Pose();
-  s.odom_increment = r->Pose();
-  s.used_increment = r->Pose();
-  s.increment_correction = r->Pose();
-  s.cumulative_correction = r->Pose();
-  s.fallback = r->Get<std::uint8_t>() != 0;
-  r->Matrix(&s.covariance);
-  r->Matrix(&s.systematic_cross);
-  return s;
+template <typename Io, typename Result>
+void VisitResult(Io& io, Result& f) {
+  io.template Value<std::uint64_t>(f.index);
+  io.template Value<double>(f.timestamp);
+  io.Enum(f.status, FrameStatus::kBadFrame);
+  io.Enum(f.fallback_reason, FallbackReason::kMissing);
+  io.Text(f.detail);
+  VisitStep(io, f.step);
+  io.OptionalPose(f.T_world_body_truth);
+  io.template Value<std::uint32_t>(f.odometry_directions);
+  io.Text(f.matcher_status);
+  io.template Value<std::int32_t>(f.iterations);
+  io.template Value<std::uint64_t>(f.inliers);
+  io.template Value<double>(f.inlier_ratio);
+  io.template Value<double>(f.rms_m);
+  io.template Value<double>(f.conditioning);
+  io.template Value<std::uint64_t>(f.points);
+  io.template Value<std::uint64_t>(f.outliers_removed);
+  io.template Value<std::uint64_t>(f.dropped_nonfinite);
+  auto& d = f.dem;
+  for (auto* v :
+       {&d.points, &d.fused, &d.candidate, &d.swapped, &d.rejected_outliers, &d.dropped_nonfinite,
+        &d.dropped_out_of_grid, &d.dropped_imprecise, &d.new_tiles}) {
+    io.template Value<std::uint64_t>(*v);
+  }
+  auto& t = f.time;
+  for (auto* v : {&t.load_ms, &t.stereo_ms, &t.prepare_ms, &t.register_ms, &t.fuse_dem_ms,
+                  &t.fuse_octomap_ms, &t.total_ms}) {
+    io.template Value<double>(*v);
+  }
+  io.OptionalPose(f.T_world_body_registered);
+  io.Matrix(f.increment_covariance);
+  io.template Value<double>(f.reference_distance_m);
+  io.Matrix(f.odometry_bias.bias);  // a column: the six entries in order
+  io.Matrix(f.odometry_bias.information);
 }
 
-void PutResult(Writer* w, const FrameResult& f) {
-  w->Put<std::uint64_t>(f.index);
-  w->Put<double>(f.timestamp);
-  w->Put<std::int32_t>(static_cast<std::int32_t>(f.status));
-  w->Put<std::int32_t>(static_cast<std::int32_t>(f.fallback_reason));
-  w->String(f.detail);
-  PutStep(w, f.step);
-  w->OptionalPose(f.T_world_body_truth);
-  w->Put<std::uint32_t>(f.odometry_directions);
-  w->String(f.matcher_status);
-  w->Put<std::int32_t>(f.iterations);
-  w->Put<std::uint64_t>(f.inliers);
-  w->Put<double>(f.inlier_ratio);
-  w->Put<double>(f.rms_m);
-  w->Put<double>(f.conditioning);
-  w->Put<std::uint64_t>(f.points);
-  w->Put<std::uint64_t>(f.outliers_removed);
-  w->Put<std::uint64_t>(f.dropped_nonfinite);
-  const dem::FusionStats& d = f.dem;
-  for (std::size_t v :
-       {d.points, d.fused, d.candidate, d.swapped, d.rejected_outliers, d.dropped_nonfinite,
-        d.dropped_out_of_grid, d.dropped_imprecise, d.new_tiles}) {
-    w->Put<std::uint64_t>(v);
-  }
-  const StageTimes& t = f.time;
-  for (double v : {t.load_ms, t.stereo_ms, t.prepare_ms, t.register_ms, t.fuse_dem_ms,
-                   t.fuse_octomap_ms, t.total_ms}) {
-    w->Put<double>(v);
-  }
-  w->OptionalPose(f.T_world_body_registered);
-  w->Matrix(f.increment_covariance);
-  w->Put<double>(f.reference_distance_m);
-  for (int i = 0; i < 6; ++i) w->Put<double>(f.odometry_bias.bias(i));
-  w->Matrix(f.odometry_bias.information);
-}
+void PutResult(Writer* w, const FrameResult& f) { VisitResult(*w, f); }
 
 FrameResult GetResult(Reader* r) {
   FrameResult f;
-  f.index = r->Get<std::uint64_t>();
-  f.timestamp = r->Get<double>();
-  const auto status = r->Get<std::int32_t>();
-  const auto reason = r->Get<std::int32_t>();
-  if (status < 0 || status > static_cast<int>(FrameStatus::kBadFrame) || reason < 0 ||
-      reason > static_cast<int>(FallbackReason::kMissing)) {
-    r->Fail();
-  }
-  f.status = static_cast<FrameStatus>(status);
-  f.fallback_reason = static_cast<FallbackReason>(reason);
-  f.detail = r->String();
-  f.step = GetStep(r);
-  f.T_world_body_truth = r->OptionalPose();
-  f.odometry_directions = r->Get<std::uint32_t>();
-  f.matcher_status = r->String();
-  f.iterations = r->Get<std::int32_t>();
-  f.inliers = r->Get<std::uint64_t>();
-  f.inlier_ratio = r->Get<double>();
-  f.rms_m = r->Get<double>();
-  f.conditioning = r->Get<double>();
-  f.points = r->Get<std::uint64_t>();
-  f.outliers_removed = r->Get<std::uint64_t>();
-  f.dropped_nonfinite = r->Get<std::uint64_t>();
-  dem::FusionStats& d = f.dem;
-  for (std::size_t* v :
-       {&d.points, &d.fused, &d.candidate, &d.swapped, &d.rejected_outliers, &d.dropped_nonfinite,
-        &d.dropped_out_of_grid, &d.dropped_imprecise, &d.new_tiles}) {
-    *v = r->Get<std::uint64_t>();
-  }
-  StageTimes& t = f.time;
-  for (double* v : {&t.load_ms, &t.stereo_ms, &t.prepare_ms, &t.register_ms, &t.fuse_dem_ms,
-                    &t.fuse_octomap_ms, &t.total_ms}) {
-    *v = r->Get<double>();
-  }
-  f.T_world_body_registered = r->OptionalPose();
-  r->Matrix(&f.increment_covariance);
-  f.reference_distance_m = r->Get<double>();
-  for (int i = 0; i < 6; ++i) f.odometry_bias.bias(i) = r->Get<double>();
-  r->Matrix(&f.odometry_bias.information);
+  VisitResult(*r, f);
   return f;
 }
 
@@ -282,19 +266,26 @@ struct RecordHeader {
   std::uint32_t crc = 0;
 };
 
-void WriteAll(int fd, const char* data, std::size_t size, const fs::path& path) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      throw io::IoError(path.string() + ": cannot write (" + std::strerror(errno) + ")");
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
+void WriteAll(int fd, std::string_view data, const fs::path& path) {
+  if (const int err = io::WriteAll(fd, data); err != 0) {
+    throw io::IoError(path.string() + ": cannot write (" + std::strerror(err) + ")");
   }
 }
 
 }  // namespace
+
+std::string EncodeFrameResult(const FrameResult& result) {
+  Writer w;
+  PutResult(&w, result);
+  return std::move(w.data());
+}
+
+FrameResult DecodeFrameResult(std::string_view bytes) {
+  Reader r(bytes, "frame result");
+  FrameResult result = GetResult(&r);
+  if (!r.AtEnd()) r.Fail();
+  return result;
+}
 
 // The Mapper's private state, written and read here only.
 struct CheckpointAccess {
@@ -542,30 +533,28 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
   header.crc = Crc32(w.data());
 
   const fs::path journal = directory_ / kJournalName;
-  const int fd = ::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
-  if (fd < 0) throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  const io::FdGuard fd(::open(journal.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666));
+  if (fd.Get() < 0) {
+    throw io::IoError(journal.string() + ": cannot open (" + std::strerror(errno) + ")");
+  }
   struct stat before {};
-  if (::fstat(fd, &before) != 0) {
-    const int err = errno;
-    ::close(fd);
-    throw io::IoError(journal.string() + ": cannot stat (" + std::strerror(err) + ")");
+  if (::fstat(fd.Get(), &before) != 0) {
+    throw io::IoError(journal.string() + ": cannot stat (" + std::strerror(errno) + ")");
   }
   try {
-    WriteAll(fd, reinterpret_cast<const char*>(&header), sizeof(header), journal);
+    WriteAll(fd.Get(), {reinterpret_cast<const char*>(&header), sizeof(header)}, journal);
     Fault("journal:partial");
-    WriteAll(fd, w.data().data(), w.data().size(), journal);
-    if (::fdatasync(fd) != 0) {
+    WriteAll(fd.Get(), w.data(), journal);
+    if (::fdatasync(fd.Get()) != 0) {
       throw io::IoError(journal.string() + ": cannot flush (" + std::strerror(errno) + ")");
     }
   } catch (...) {
     // A record cut short (full disk, file-size limit) is cut off: left there, it would hide
     // every record appended after it from Restore, which stops at the first damaged one (if
     // this fails too, Restore still drops it as the last record).
-    [[maybe_unused]] const int cut = ::ftruncate(fd, before.st_size);
-    ::close(fd);
+    [[maybe_unused]] const int cut = ::ftruncate(fd.Get(), before.st_size);
     throw;
   }
-  ::close(fd);
   ++journal_records_;
 }
 

@@ -1,9 +1,10 @@
-#include "mapper/Outputs.hpp"
+#include "service/Outputs.hpp"
 
 #include <chrono>
 #include <utility>
 #include <vector>
 
+#include "core/Stopwatch.hpp"
 #include "io/FileUtil.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/MapPreview.hpp"
@@ -66,8 +67,7 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   WriteDriftPlot(out_dir / "drift.png", results, drift);
   done("drift.png");
 
-  run.write_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  run.write_ms = core::MsSince(start);
   if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
   const nlohmann::json summary = Summary(state, run, drift);
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");

@@ -11,7 +11,7 @@
 #include "eval/EvalOptions.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/OutputState.hpp"
+#include "service/OutputState.hpp"
 
 namespace rovermap::mapper {
 

@@ -1,7 +1,7 @@
 #pragma once
 // `rovermap serve` (docs/design.md §7): frames taken from an inbox as they arrive, in index order,
 // through the same Mapper as replay; the outputs of §6 published every few frames, status.json
-// after every frame, and every frame journalled (mapper/Checkpoint) before it counts as done,
+// after every frame, and every frame journalled (service/Checkpoint) before it counts as done,
 // so that a restart after `kill -9` resumes where the run stopped.
 
 #include <atomic>
@@ -16,10 +16,10 @@
 
 #include "eval/EvalOptions.hpp"
 #include "io/Inbox.hpp"
-#include "mapper/Checkpoint.hpp"
 #include "mapper/Mapper.hpp"
-#include "mapper/OutputPublisher.hpp"
 #include "mapper/ServeOptions.hpp"
+#include "service/Checkpoint.hpp"
+#include "service/OutputPublisher.hpp"
 
 namespace rovermap::mapper {
 
@@ -72,12 +72,20 @@ class Daemon {
 
  private:
   using Clock = std::chrono::steady_clock;
-  bool Step(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  using FrameFiles = std::map<std::size_t, io::InboxFrameFiles>;
+  bool Step(const FrameFiles& files);
+  /// Rejects the ready frames beyond serve.max_gap_frames. @return whether there was one.
+  bool RejectMisnumbered(const FrameFiles& files);
+  FrameFiles::const_iterator FirstReadyAfter(const FrameFiles& files, std::size_t index) const;
+  /// Whether the next frame, held up by a later ready one, has waited serve.gap_timeout_s.
+  bool GapTimedOut(const FrameFiles& files);
+  /// Declares every index before the first ready frame missing.
+  void DeclareGapMissing(const FrameFiles& files);
   void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files);
   /// A frame of which some files came, declared missing.
   void DeclareMissing(std::size_t index, const io::InboxFrameFiles& files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
-  void RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files);
+  void RejectLate(const FrameFiles& files);
   void Publish();
   void WriteStatus(const char* state, std::size_t waiting);
   void Log(const std::string& line) const {

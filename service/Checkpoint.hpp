@@ -97,6 +97,11 @@ class Checkpoint {
   std::size_t snapshot_bytes_ = 0;
 };
 
+/// A FrameResult as the snapshot and the journal hold it.
+std::string EncodeFrameResult(const FrameResult& result);
+/// EncodeFrameResult's inverse. @throw CheckpointError if `bytes` is not exactly one.
+FrameResult DecodeFrameResult(std::string_view bytes);
+
 /// CRC-32 (IEEE 802.3, as zlib's crc32) of `data`.
 std::uint32_t Crc32(std::string_view data);
 

@@ -1,4 +1,4 @@
-#include "mapper/OutputState.hpp"
+#include "service/OutputState.hpp"
 
 namespace rovermap::mapper {
 

@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "eval/EvalOptions.hpp"
-#include "mapper/DriftReport.hpp"
-#include "mapper/OutputState.hpp"
+#include "service/DriftReport.hpp"
+#include "service/OutputState.hpp"
 
 namespace rovermap::mapper {
 

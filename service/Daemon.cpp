@@ -1,4 +1,4 @@
-#include "mapper/Daemon.hpp"
+#include "service/Daemon.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -14,20 +14,20 @@
 #include <system_error>
 #include <utility>
 
+#include "core/Stopwatch.hpp"
 #include "io/DirectoryWatcher.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
-#include "mapper/DriftReport.hpp"
-#include "mapper/Outputs.hpp"
+#include "service/DriftReport.hpp"
+#include "service/Outputs.hpp"
+#include "service/StatusLine.hpp"
 
 namespace rovermap::mapper {
 namespace {
 
 namespace fs = std::filesystem;
 
-double MsBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
+using core::MsBetween;
 
 std::string UtcNow() {
   const std::time_t now = std::time(nullptr);
@@ -66,6 +66,10 @@ Daemon::Daemon(DaemonSetup setup) : setup_(std::move(setup)), inbox_(setup_.inbo
   const std::string pid = std::to_string(::getpid()) + "\n";
   if (::ftruncate(lock_fd_, 0) != 0 || ::pwrite(lock_fd_, pid.data(), pid.size(), 0) < 0) {
     throw io::IoError(lock.string() + ": cannot write the pid (" + std::strerror(errno) + ")");
+  }
+  // With the lock held no other daemon writes here: temporaries are a killed publication's.
+  for (const fs::path& temp : io::RemoveTemporaryFiles(setup_.out)) {
+    Log("serve: removed " + temp.string() + ", left by an interrupted publication");
   }
 }
 
@@ -160,11 +164,26 @@ void Daemon::Run(const std::atomic<int>& stop) {
       std::to_string(processed_) + " frames this run)");
 }
 
-bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
+// One move of the queue: the frame expected next, or the frames a timed-out gap declares missing.
+bool Daemon::Step(const FrameFiles& files) {
   RejectLate(files);
+  if (RejectMisnumbered(files)) return true;
   const std::size_t next = state_.next_index;
-  // A ready frame numbered far beyond the queue is misnumbered: waiting it out would declare
-  // every index between missing (10^12 of them for a stray 999999999999.ply).
+  const auto it = files.find(next);
+  if (it != files.end() && it->second.Complete(sequence_.sensor_type)) {
+    gap_since_.reset();
+    ProcessIndex(next, it->second);
+    return true;
+  }
+  if (!GapTimedOut(files)) return false;
+  DeclareGapMissing(files);
+  return true;
+}
+
+// A ready frame numbered far beyond the queue is misnumbered: waiting it out would declare
+// every index between missing (10^12 of them for a stray 999999999999.ply).
+bool Daemon::RejectMisnumbered(const FrameFiles& files) {
+  const std::size_t next = state_.next_index;
   const std::size_t limit = next + static_cast<std::size_t>(setup_.serve.max_gap_frames);
   bool rejected = false;
   for (auto far = files.upper_bound(limit); far != files.end(); ++far) {
@@ -177,18 +196,20 @@ bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
         std::to_string(next) + " expected next");
     rejected = true;
   }
-  if (rejected) return true;
-  const auto it = files.find(next);
-  if (it != files.end() && it->second.Complete(sequence_.sensor_type)) {
-    gap_since_.reset();
-    ProcessIndex(next, it->second);
-    return true;
-  }
-  // The queue is held only by a later frame that is ready.
-  const bool held = std::any_of(files.upper_bound(next), files.end(), [&](const auto& entry) {
+  return rejected;
+}
+
+Daemon::FrameFiles::const_iterator Daemon::FirstReadyAfter(const FrameFiles& files,
+                                                           std::size_t index) const {
+  return std::find_if(files.upper_bound(index), files.end(), [&](const auto& entry) {
     return entry.second.Complete(sequence_.sensor_type);
   });
-  if (!held) {
+}
+
+// The queue is held only by a later frame that is ready; the gap's clock starts then.
+bool Daemon::GapTimedOut(const FrameFiles& files) {
+  const std::size_t next = state_.next_index;
+  if (FirstReadyAfter(files, next) == files.end()) {
     gap_since_.reset();
     return false;
   }
@@ -199,11 +220,14 @@ bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
   }
   if (MsBetween(*gap_since_, Clock::now()) < 1000.0 * setup_.serve.gap_timeout_s) return false;
   gap_since_.reset();
-  // Every index up to the first ready frame has waited as long: a run of missing frames costs
-  // one timeout, not one each.
-  const auto ready = std::find_if(files.upper_bound(next), files.end(), [&](const auto& entry) {
-    return entry.second.Complete(sequence_.sensor_type);
-  });
+  return true;
+}
+
+// Every index up to the first ready frame has waited as long: a run of missing frames costs
+// one timeout, not one each.
+void Daemon::DeclareGapMissing(const FrameFiles& files) {
+  const std::size_t next = state_.next_index;
+  const auto ready = FirstReadyAfter(files, next);
   // Indices of which nothing came are journalled once per run (the journal holds the
   // daemon's whole state with each record, so one record each would grow as the run squared).
   std::optional<std::size_t> run_start;
@@ -230,7 +254,6 @@ bool Daemon::Step(const std::map<std::size_t, io::InboxFrameFiles>& files) {
     DeclareMissing(index, present->second);
   }
   journal_run(ready->first);
-  return true;
 }
 
 void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files) {
@@ -319,13 +342,7 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   ++processed_;
   last_frame_time_ = UtcNow();
   std::ostringstream line;
-  line << "serve: frame " << result->index << " " << ToString(result->status);
-  if (result->fallback_reason != FallbackReason::kNone &&
-      result->fallback_reason != FallbackReason::kFirstFrame) {
-    line << " (" << ToString(result->fallback_reason);
-    if (!result->detail.empty()) line << ": " << result->detail;
-    line << ")";
-  }
+  line << "serve: frame " << result->index << " " << StatusLine(*result);
   line << std::fixed << std::setprecision(0) << ", " << result->time.load_ms + result->time.total_ms
        << " ms, " << (waiting_ > 0 ? waiting_ - 1 : 0) << " waiting";
   Log(line.str());
@@ -360,7 +377,7 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   }
 }
 
-void Daemon::RejectLate(const std::map<std::size_t, io::InboxFrameFiles>& files) {
+void Daemon::RejectLate(const FrameFiles& files) {
   for (const auto& [index, present] : files) {
     if (index >= state_.next_index) break;
     if (Contains(state_.missing, index)) {
