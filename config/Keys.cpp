@@ -111,6 +111,8 @@ std::vector<KeyEntry> BuildRegistry() {
       "seed_translation_sigma_m", &R::seed_translation_sigma_m, "m", AtLeast(0),
       "seed's 1-sigma in the gate, shrinks with the steps; 0 = replay: mapper.seed_gate_scale");
   reg.Int("min_pairs", &R::min_pairs, "count", AtLeast(3), "fewer pairs after gating = failure");
+  reg.Bool("reuse_closest_points", &R::reuse_closest_points,
+           "no search while the closest point cannot have changed; same result, faster");
 
   using S = stereo::StereoOptions;
   SectionKeys<S> st(keys, "stereo", &Config::stereo);

@@ -5,7 +5,7 @@ excerpt.
 Usage:
     python3 scripts/make_kitti_sequence.py SOURCE_DIR OUT_DIR
     e.g. python3 scripts/make_kitti_sequence.py \
-             /work/shared/datasets/kitti_odometry_excerpt_stereo51 datasets/kitti_stereo51
+             SOURCE/kitti_odometry_excerpt_stereo51 datasets/kitti_stereo51
 
 SOURCE_DIR holds calib.txt (KITTI P0, P1), poses.txt (51 lines, row-major 3x4 T_cam0_camk),
 image_l/NNNNNN.png and image_r/NNNNNN.png (and optionally SHA256SUMS, which is checked).

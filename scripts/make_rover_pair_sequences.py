@@ -4,7 +4,7 @@ two-frame stereo sequences) from the team's shared copies of two real rover ster
 
 Usage:
     python3 scripts/make_rover_pair_sequences.py SHARED_DATASETS_DIR OUT_DATASETS_DIR
-    e.g. python3 scripts/make_rover_pair_sequences.py /work/shared/datasets datasets
+    e.g. python3 scripts/make_rover_pair_sequences.py SOURCE datasets
 
 Reads SHARED/rover_erfoud_minnie_pair (deg3_left/, deg3_right/, poses_derived.txt, LICENSE.md)
 and SHARED/rover_devon_island_pair (left/, right/, calib/CameraCalibration, LICENSE.md), checks

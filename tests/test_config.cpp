@@ -123,6 +123,7 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(a.seed_rotation_sigma_deg, b.seed_rotation_sigma_deg);
   EXPECT_EQ(a.seed_translation_sigma_m, b.seed_translation_sigma_m);
   EXPECT_EQ(a.min_pairs, b.min_pairs);
+  EXPECT_EQ(a.reuse_closest_points, b.reuse_closest_points);
 }
 
 // Counts an aggregate's fields: the most initialisers T{...} accepts.
