@@ -97,10 +97,12 @@ def SelfTest():
         (root / "stereo").mkdir()
         (root / "stereo" / "B.cpp").write_text('// x\n#include "io/A.hpp"\n')
         errors = Check(root)
+        layer = LayerOf()
         expected = [
-            'io/A.hpp:3: #include "config/Config.hpp": config/ (layer 5) is above io/ (layer 1)',
-            'stereo/B.cpp:2: #include "io/A.hpp": io/ (layer 1) is the same layer as stereo/ '
-            '(layer 1)',
+            f'io/A.hpp:3: #include "config/Config.hpp": config/ (layer {layer["config"]}) is '
+            f'above io/ (layer {layer["io"]})',
+            f'stereo/B.cpp:2: #include "io/A.hpp": io/ (layer {layer["io"]}) is the same layer '
+            f'as stereo/ (layer {layer["stereo"]})',
         ]
         (root / "newmodule").mkdir()
         (root / "newmodule" / "C.cpp").write_text("")
