@@ -176,13 +176,19 @@ def slug(heading):
     return text.replace(" ", "-")
 
 
+def fenced_line_indices(lines):
+    """0-based indices of the lines inside fenced blocks, fences included."""
+    in_fence = set()
+    for _, start, body, _ in parse_fences(lines):
+        in_fence.update(range(start - 1, start + len(body) + 1))
+    return in_fence
+
+
 def anchors_of(page_path):
     anchors = set()
     seen = {}
     lines = page_path.read_text(encoding="utf-8").splitlines()
-    in_fence = set()
-    for _, start, body, _ in parse_fences(lines):
-        in_fence.update(range(start - 1, start + len(body) + 1))
+    in_fence = fenced_line_indices(lines)
     for index, line in enumerate(lines):
         if index in in_fence:
             continue
@@ -202,9 +208,7 @@ def check_links(args, pages):
         page_path = (args.source / page).resolve()
         name = os.path.relpath(page_path, args.source)
         lines = page_path.read_text(encoding="utf-8").splitlines()
-        in_fence = set()
-        for _, start, body, _ in parse_fences(lines):
-            in_fence.update(range(start - 1, start + len(body) + 1))
+        in_fence = fenced_line_indices(lines)
         for index, line in enumerate(lines):
             if index in in_fence:
                 continue
