@@ -1,7 +1,8 @@
-// The `rovermap` command. A one-shot `register` runs here, in a program that loads 8 shared
-// libraries (3 ms); every other command line runs in rovermap-full, which loads GDAL and OpenCV's
-// image codecs, about 160 libraries and 65 ms before its first line of work, and which this
-// process becomes (execv: the same process, its arguments and exit status unchanged).
+// The `rovermap` command. A one-shot `register` runs here, in a program that loads a handful of
+// shared libraries; every other command line runs in rovermap-full, which loads GDAL and OpenCV's
+// image codecs, a start-up longer than a one-shot registration's own work (docs/benchmarks.md,
+// "One-shot registration"), and which this process becomes (execv: the same process, its
+// arguments and exit status unchanged).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>

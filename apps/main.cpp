@@ -27,8 +27,8 @@ int main(int argc, char** argv) {
   // core its partner needs (docs/replay.md, "Threads"). libgomp reads OMP_WAIT_POLICY when it is
   // loaded, before main, so the default is set by running this program again with it (once; a
   // user's setting is kept). Only for the commands that run many frames: loading the program's
-  // libraries again (GDAL's alone are over a hundred) would cost a one-shot command more than
-  // spinning does.
+  // libraries again (GDAL's among them) would cost a one-shot command more than spinning does
+  // (docs/benchmarks.md, "One-shot registration").
   if (std::getenv("OMP_WAIT_POLICY") == nullptr && RunsManyFrames(argc, argv)) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are

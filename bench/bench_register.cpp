@@ -382,9 +382,8 @@ class Worker {
 
   // One run after an idle pause. libgomp's idle threads spin-wait (300 000 rounds, some
   // milliseconds) before they sleep: without the pause the previous method's threads still
-  // held the cores when the next run began. Measured (5 rounds, bunny pairs): rovermap's
-  // default 21.5 / 24.1 ms straight after the previous method, 17.8 / 20.4 ms after 100 ms;
-  // Open3D's point-to-plane 96.0 / 112.7 and 96.2 / 116.1 ms.
+  // held the cores when the next run began, which slowed rovermap's short runs, not the
+  // peers' long ones (bench/README.md, "How the methods are kept apart").
   RunResult Run() {
     if (pause_ms_ > 0) ::usleep(static_cast<useconds_t>(pause_ms_) * 1000);
     return DecodeResult(Ask("run"));
@@ -519,9 +518,10 @@ int main(int argc, char** argv) {
       const BenchPair& pair = pairs[pair_index];
       // Each method runs in its own process (this program re-executed), so that no library's
       // allocations change another's: in one process, after Open3D had run, each default bun045
-      // registration took 26-30 ms instead of 16-17 (glibc had handed the freed memory back and
-      // every run faulted it in again). Worker 0 is rovermap's default; its warm-up run gives D
-      // (median spacing of the target), and D everyone else's gate.
+      // registration was slower, glibc having handed the freed memory back so that every run
+      // faulted it in again (bench/README.md, "How the methods are kept apart"). Worker 0 is
+      // rovermap's default; its warm-up run gives D (median spacing of the target), and D
+      // everyone else's gate.
       std::vector<Worker> workers;
       workers.push_back(StartWorker(argc, argv, pair_index, 0, 0.0, args.pause_ms));
       const RunResult warm = workers[0].Run();

@@ -75,8 +75,9 @@ BatchOcTree::BatchOcTree(double resolution) : octomap::OcTree(resolution) {}
 // OcTreeBaseImpl::computeRayKeys (Amanatides & Woo's 3-D DDA), expression for expression so that
 // the same floats pick the same voxels, with each key's Morton code stepped along with it and
 // handed to the free set at once: no key ray stored and read back, no code spread from a key
-// per voxel (the two took 15 % of a KITTI replay's CPU time). The tests compare the tree with
-// OctoMap's insertPointCloud byte for byte.
+// per voxel (the two were a visible share of a KITTI replay's CPU time; docs/benchmarks.md,
+// "Figures behind the frame pipeline's code"). The tests compare the tree with OctoMap's
+// insertPointCloud byte for byte.
 void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d& end) {
   octomap::OcTreeKey key_origin, key_end;
   // computeRayKeys would print and fail on either.

@@ -133,8 +133,8 @@ struct CellCandidate {
 };
 
 /// One cell as stored: the primary's layers, then the candidate. 44 bytes, no
-/// padding; docs/maps.md ("Memory and speed") gives its fusion speed against the 32-byte
-/// one-hypothesis record and a 48-byte aligned one.
+/// padding; docs/benchmarks.md ("Maps") gives its fusion speed against a 48-byte aligned
+/// one.
 struct CellRecord {
   CellValue value;
   CellCandidate candidate;

@@ -21,7 +21,8 @@ namespace rovermap::io {
 struct GeoTiffOptions {
   int block_size = 512;   ///< [px] COG tile edge (power of two, 64..4096)
   bool overviews = true;  ///< build overviews (COG OVERVIEWS=AUTO) or none
-  int deflate_level = 1;  ///< [1..9] DEFLATE effort (1: 3x faster than 6, 4 % larger)
+  int deflate_level = 1;  ///< [1..9] DEFLATE effort (1: much faster than 6, slightly larger;
+                          ///< docs/benchmarks.md, "Maps")
   int threads = 0;        ///< [count] GDAL compression threads; 0 = all cores
 };
 

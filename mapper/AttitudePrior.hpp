@@ -2,8 +2,7 @@
 // Roll and pitch of dead reckoning as an absolute measurement. A rover's IMU or inclinometers
 // measure them against gravity, so they do not drift; frame-to-frame registration estimates the
 // relative attitude with a small bias that accumulates along the chain (docs/replay.md, "Known
-// limits": 0.6° of pitch after 30 simulated stereo frames, 1.6° of roll after 60 m of KITTI), and
-// the DEM tilts with it. A scalar Kalman filter per angle pulls the chained roll and pitch towards
+// limits"), and the DEM tilts with it. A scalar Kalman filter per angle pulls the chained roll and pitch towards
 // dead reckoning's; yaw and position stay the registration's.
 
 #include <Eigen/Geometry>

@@ -215,8 +215,9 @@ class Mapper {
   LocalMap local_map_;
   double last_reference_distance_m_ = 0.0;
   std::vector<FrameResult> results_;
-  // Fuse's buffers, kept from frame to frame: a KITTI frame's covariances take 50 MB, and a new
-  // block every frame was paid again in page faults.
+  // Fuse's buffers, kept from frame to frame: a KITTI frame's covariances are large, and a new
+  // block every frame was paid again in page faults (docs/benchmarks.md, "Figures behind the
+  // frame pipeline's code").
   std::vector<Eigen::Matrix3d> fuse_covariances_;
   std::vector<Eigen::Vector3d> fuse_normals_;
 };

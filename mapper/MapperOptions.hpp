@@ -52,8 +52,8 @@ struct MapperOptions {
 
   /// Dead reckoning's roll and pitch as an absolute measurement (IMU, inclinometers), σ [deg];
   /// 0 = roll and pitch from the chain alone (they drift: see AttitudePrior). Off by default:
-  /// on KITTI (0.2°) it removed the 1.6° roll drift but the registered steps' own tilt then
-  /// drove the height 0.6 m off (docs/replay.md, "Known limits").
+  /// on KITTI the registered steps' own height bias then drove the height off (docs/replay.md,
+  /// "Choosing the options").
   double odometry_attitude_sigma_deg = 0.0;
   /// Roll and pitch uncertainty one registered increment adds to the chain [deg]: a floor under
   /// the registration's own covariance for these angles (FloorAttitudeVariance), and the step
@@ -63,7 +63,7 @@ struct MapperOptions {
   /// pixel's error as independent: neighbouring pixels share theirs (the matcher's block, the
   /// sub-pixel window), and a rig's calibration errors are common to all. The registration's
   /// covariance of stereo frames is multiplied by this [ratio of variances]: the per-step error
-  /// against the ground truth is 5-10x the information's σ on KITTI and the simulator
+  /// against the ground truth is several times the information's σ on KITTI and the simulator
   /// (docs/replay.md, "What happens to each frame"). Cloud frames keep theirs.
   double stereo_covariance_scale = 50.0;
   /// The part of a registered stereo increment's error that repeats from step to step, per
@@ -71,7 +71,8 @@ struct MapperOptions {
   /// turns every step alike [ratio of the step's length; deg per metre]. Cloud frames: none.
   /// Chained as a systematic error (PoseChain, SystematicError) that persists over about
   /// `stereo_systematic_frames` steps [frames], so it adds up linearly instead of as a
-  /// random walk. On KITTI (1 m steps) these give a chained NEES of 7.4 (6 expected).
+  /// random walk. On KITTI (1 m steps) these give a chained NEES close to the 6 expected
+  /// (docs/replay.md, "Known limits").
   double stereo_systematic_ratio = 0.007;
   double stereo_systematic_deg_per_m = 0.03;
   double stereo_systematic_frames = 100.0;

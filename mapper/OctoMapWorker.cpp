@@ -86,9 +86,9 @@ namespace {
 
 // glibc keeps the memory the threads free in their arenas; over a long traverse the OcTree's
 // many small allocations and the frames' buffers leave it fragmented, and the resident memory
-// grew with it. Handing it back every 25 insertions kept a 2000-frame loop's resident memory at
-// 153-164 MB after the first lap instead of 168 -> 184 MB, at no per-frame cost (bench/README,
-// "bench_long"); every insertion cost the DEM fusion 3 ms a frame (pages faulted back in).
+// grew with it. Handing it back every 25 insertions keeps a long loop's resident memory flat
+// after the first lap at no per-frame cost (docs/benchmarks.md, "Serve"); after every insertion
+// the DEM fusion paid for the pages faulted back in (docs/benchmarks.md, "Figures behind the frame pipeline's code").
 constexpr long kTrimEveryInsertions = 25;
 
 void ReturnFreedMemory() {

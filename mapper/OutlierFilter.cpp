@@ -16,8 +16,9 @@ OutlierMask FindIsolatedPoints(const std::vector<Eigen::Vector3d>& points,
   if (!(radius_factor > 0.0) || min_neighbors <= 0 || n < 2 || tree.size() != n) return mask;
 
   // α, the median of nearest distance / range, from an even sample of at most kSample points:
-  // a median, it needs no more (the whole frame's 280 000 nearest-neighbour searches were a
-  // tenth of a KITTI replay's time, for a figure this sample gives to a fraction of a percent).
+  // a median, it needs no more (a search for every point of the frame was a visible share of a
+  // KITTI replay's time, for a figure this sample gives to a fraction of a percent;
+  // docs/benchmarks.md, "Figures behind the frame pipeline's code").
   constexpr std::size_t kSample = 16384;
   const std::size_t stride = std::max<std::size_t>(1, n / kSample);
   const std::size_t sampled = (n + stride - 1) / stride;

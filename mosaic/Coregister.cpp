@@ -283,8 +283,8 @@ Eigen::Isometry3d ConstrainedStep(const Eigen::Isometry3d& T, const Constraint& 
 // T = (Exp(r), t) with its roll and pitch weighed against their prior σ (the inputs' own
 // attitude, from gravity): the most likely correction given the match's information and that
 // prior, c' = (I + P)⁻¹ I c = c − (I + P)⁻¹ P c. A small overlap constrains the tilt poorly
-// and a tilt carries far: on a 15 % overlap the match found 0.2° of roll (σ 0.18°) in a
-// traverse whose DEM had none, 2 cm at its far end.
+// and a tilt carries far: on a small overlap the match alone found a tilt in a traverse whose
+// DEM had none (docs/mosaic.md, "Co-registration").
 Eigen::Isometry3d WeighTilt(const Eigen::Isometry3d& T, const Matrix6d& information,
                             double tilt_sigma_deg) {
   const Eigen::AngleAxisd aa(T.linear());

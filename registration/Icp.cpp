@@ -42,10 +42,9 @@ struct Match {
 // the same piece of curve or surface with the same noise, so their spreads agree and are
 // typical of the data, while an end whose neighbourhood is no clean sample (an outlier, whose
 // PCA normal is fitted to scattered points) has a large spread of its own that must not buy
-// the pair a pass. Measured on the terrain pair with 15 % outliers: the root-sum-square of
-// the two let the outliers through (0.0167° and 1.5 mm against 0.0112° and 0.54 mm with the
-// plain test), and the smaller one alone let pairs of two outliers through (a 3·D sample
-// ended 73 mm off).
+// the pair a pass. On the terrain pair with outliers the root-sum-square of the two let the
+// outliers through, and the smaller one alone let pairs of two outliers through
+// (docs/matcher.md, "Where the defaults differ from the paper, and why").
 struct OrientationTest {
   bool enabled = false;
   double min_abs_cos = 0.0;  // cos Θ
@@ -104,8 +103,8 @@ struct PoseSpread {
            translation_var_m2 * Eigen::Matrix3d::Identity();
   }
   /// The search radius for p: Dmax, widened to this many σ of p's displacement. Not bounded
-  /// by the initial Dmax: on KITTI that bound took a 0.8°/m seed's ATE from 1.09 to 1.62× the
-  /// truth-seeded one's (the far points it cut off are those that hold the heading).
+  /// by the initial Dmax: that bound cut off the far points that hold the heading, and a
+  /// biased seed's ATE on KITTI grew (docs/benchmarks.md, "Figures behind the matcher's code").
   double Radius(const Eigen::Vector3d& p, double dmax, double sigmas) const {
     if (!Open()) return dmax;
     return std::max(dmax,
@@ -247,8 +246,9 @@ Eigen::Vector3d PairNormal(const IndexedCloud& source, const IndexedCloud& targe
 // squared Mahalanobis distance dᵀ(R Λx Rᵀ + Λy + Λpose)⁻¹ d (§4.4) instead. Λpose spreads the
 // pose's own uncertainty to the point p (δr × p + δt): without it the gate, unlike Dmax, is
 // anchored to the seed from the first iteration, and a seed a degree off in heading gates out
-// exactly the far points that would turn it back (without it, 60-75 % of a 0.4°/m seed's
-// heading error stayed in KITTI's registered increments).
+// exactly the far points that would turn it back (without it, most of a biased seed's heading
+// error stayed in KITTI's registered increments: docs/benchmarks.md, "Figures behind the
+// matcher's code").
 // A kept pair's §4.4 weight comes from the same R Λx Rᵀ + Λy: 1 / tr(· + sampling) for
 // point-to-point, and for point-to-plane the inverse variance of the residual along the normal,
 // 1 / nᵀ(R Λx Rᵀ + Λy)n. Returns the weight (0 for a pair that carries nothing along its
@@ -262,9 +262,10 @@ double GateAndWeight(const IndexedCloud& source, const IndexedCloud& target, con
   Eigen::Matrix3d gate = pair;
   gate.diagonal().array() += sampling_variance;
   if (spread.Open()) gate += spread.At(p);
-  // Eigen inverts a fixed 3×3 by cofactors: a fraction of an LDLT's cost (13 % of a stereo
-  // replay's CPU was the gate and the weights). The matrix is SPD: a positive determinant
-  // is the only check needed.
+  // Eigen inverts a fixed 3×3 by cofactors: a fraction of an LDLT's cost, and the gate and
+  // the weights are a visible share of a stereo replay's CPU (docs/benchmarks.md, "Figures
+  // behind the matcher's code"). The matrix is SPD: a positive determinant is the only check
+  // needed.
   bool invertible = false;
   Eigen::Matrix3d inverse;
   gate.computeInverseWithCheck(inverse, invertible, 0.0);
@@ -482,8 +483,8 @@ void ComputeInformation(const IndexedCloud& source, const IndexedCloud& target,
   const bool plane = EffectiveResidual(options) == Residual::kPointToPlane;
   // The floor needs normals fitted to the points by PCA at both ends (EstimatesOrientations):
   // given normals are either exact (a simulator's) or, from a stereo image's neighbouring
-  // pixels, so noisy that textured ground's in-plane information is only 1.7-2.1x their floor
-  // (the simulated stereo traverse), where registration still beats dead reckoning 3x.
+  // pixels, so noisy that textured ground's in-plane information is barely above their floor
+  // where registration still clearly beats dead reckoning (docs/replay.md, "Known limits").
   const bool floor_from_pairs = target.EstimatesOrientations() && source.EstimatesOrientations();
   const bool has_floor = target.EstimatesOrientations();
   double sum_sq = 0.0;
@@ -793,11 +794,11 @@ class MatchingLoop {
   // coarse pairs (`orientation_min_rejected`): on clean scans it removes next to nothing, and
   // the source's PCA normals over the whole sample were most of its cost. A source with given
   // normals (stereo) pays nothing for the test and gets no coarse stage from it: coarse to
-  // fine moved each stereo frame's stopping point by up to 0.05° and raised the default
-  // simulated stereo replay's ATE from 1.05 to 1.60 cm (three other seeds: −0.8 to +0.01 cm).
-  // A stage of 10 iterations on every 5th point took a fifth off KITTI's registration time at
-  // the same accuracy over 51 frames, but broke a frame of a 0.8°/m seed on 20 of them and ran
-  // the simulated cloud traverse (given normals) to the iteration limit twice: not adopted.
+  // fine moved each stereo frame's stopping point and raised the simulated stereo replay's ATE
+  // (docs/matcher.md, "Where the defaults differ from the paper, and why"). A coarse stage on
+  // every 5th point saved KITTI registration time at the same accuracy, but broke a frame of a
+  // biased seed and ran the simulated cloud traverse to the iteration limit: not adopted
+  // (docs/matcher.md, "What a registration costs").
   // Dropped, it also thins the fine stage (clean_sample_step): pairs the coarse stage found
   // clean give the same accuracy from a quarter of the sample, and the fine queries and the
   // target normals they need were most of what was left.

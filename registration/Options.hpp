@@ -21,8 +21,8 @@ enum class Convergence { kRelative, kAbsolute };
 /// Acceleration of the iterates (docs/design.md §1, "Known weakness"): Anderson extrapolation of
 /// the pose with an energy safeguard (AA-ICP, Pavlov et al. 2018), or none (the paper).
 /// kAuto: Anderson for point-to-point, which creeps; none for point-to-plane, whose
-/// Gauss-Newton steps it only disturbed (measured: more iterations, half the extrapolations
-/// rejected).
+/// Gauss-Newton steps it only disturbed: more iterations, many extrapolations rejected
+/// (docs/matcher.md, "Where the defaults differ from the paper, and why").
 enum class Acceleration { kAuto, kNone, kAnderson };
 
 /// Options of the iterative point matcher. Defaults are for dense stereo / range data;

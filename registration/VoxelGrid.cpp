@@ -91,7 +91,8 @@ std::vector<std::size_t> VoxelSample(const std::vector<Eigen::Vector3d>& points,
   VoxelGrid grid(edge_m, points.size() / 4 + 1);
   std::vector<std::uint64_t> rank;  // kAnyMember: the kept point's hash
   // Size the table from the first eighth's fill once: growing it step by step rehashes the
-  // whole table each time, which cost 40 % of sampling a 40k-point scan at its own spacing.
+  // whole table each time, a large share of sampling a scan at its own spacing
+  // (docs/benchmarks.md, "Figures behind the matcher's code").
   const std::size_t probe_end = points.size() / 8;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (i == probe_end && i > 0) grid.Reserve(grid.size() * 10);  // 8 eighths and a margin

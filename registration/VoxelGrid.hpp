@@ -8,9 +8,9 @@
 namespace rovermap::registration {
 
 /// Dense ids for the occupied cells of a cubic voxel grid: an open-addressing hash of the
-/// integer cell coordinates. Measured on a 300k-point frame in row order: 1.4–1.8× faster
-/// than the std::unordered_map it replaced in stereo's downsampling (25 against 45 ms at
-/// 1 cm voxels).
+/// integer cell coordinates, faster than the std::unordered_map it replaced in stereo's
+/// downsampling on frames in row order (docs/benchmarks.md, "Figures behind the matcher's
+/// code").
 class VoxelGrid {
  public:
   /// `edge_m` > 0 [m]; `expected_cells` sizes the table (it grows when needed).

@@ -298,7 +298,8 @@ struct CheckpointAccess {
     w->Put<std::uint64_t>(m.reference_index_.value_or(0));
     w->Put<double>(m.last_reference_distance_m_);
     // The previous frame's cloud is not saved (a stereo frame's points with their covariances
-    // are 12 MB): restoring loads that frame from the inbox again, which gives the same points.
+    // are many megabytes; docs/benchmarks.md, "Figures behind the daemon's code"): restoring
+    // loads that frame from the inbox again, which gives the same points.
     const bool previous =
         m.previous_ && m.reference_index_ && *m.reference_index_ < m.results_.size();
     w->Put<std::uint8_t>(previous ? 1 : 0);
@@ -583,8 +584,9 @@ void Checkpoint::Save(const Mapper& mapper, const DaemonState& state) {
 }
 
 std::uint32_t Crc32(std::string_view data) {
-  // Slicing by 8 (Intel's method): eight bytes per step through eight tables, about 5x the
-  // byte-wise loop; a snapshot runs to megabytes and is written every few frames.
+  // Slicing by 8 (Intel's method): eight bytes per step through eight tables, several times
+  // faster than the byte-wise loop (docs/benchmarks.md, "Figures behind the daemon's code");
+  // a snapshot runs to megabytes and is written every few frames.
   static const std::array<std::array<std::uint32_t, 256>, 8> table = [] {
     std::array<std::array<std::uint32_t, 256>, 8> t{};
     for (std::uint32_t i = 0; i < 256; ++i) {

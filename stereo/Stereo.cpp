@@ -41,8 +41,9 @@ std::string CheckCamera(const StereoCamera& c) {
 
 // Gradient-based sub-pixel refinement (Lucas & Kanade 1981, in one dimension). OpenCV's
 // parabola through the matching costs is biased towards whole pixels and, on the simulator's
-// pairs, read the disparity 0.06–0.18 px short depending on the disparity: a non-affine error
-// that bends the ground differently in successive frames and tilts every registered step.
+// pairs, read the disparity short by an amount that depends on the disparity (docs/stereo.md,
+// "Sub-pixel refinement"): a non-affine error that bends the ground differently in successive
+// frames and tilts every registered step.
 // With L(x) ≈ R(x − d), the right image warped by the current disparity, W(x) = R(x − d), gives
 // W − L ≈ Δ·G for the missing shift Δ, G the x-gradient; Δ = Σ(W − L)G / ΣG² over the window.
 // Each pixel is warped by its own disparity, so slanted ground needs no fronto-parallel window.
@@ -107,8 +108,8 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
   const double max_h_sq = o.fill_max_horizontal_sigma_m * o.fill_max_horizontal_sigma_m;
   const Eigen::Matrix<double, 2, 3> horizontal = R.topRows<2>();  // body x, y of a sensor vector
   // Room for twice the measured points (KITTI's frames: 1.6 times): grown point by point, the
-  // fill's covariances were copied again at every doubling (5 % of a KITTI replay's time, with
-  // the page faults of each new block). Pages never written cost nothing.
+  // fill's covariances were copied again at every doubling, with the page faults of each new
+  // block (docs/benchmarks.md, "Figures behind the frame pipeline's code"). Pages never written cost nothing.
   const std::size_t room = fill->points.size() + 2 * cloud.size();
   fill->points.reserve(room);
   fill->covariances.reserve(room);
@@ -382,7 +383,7 @@ StereoPointsResult DisparityToPoints(const cv::Mat& disparity, const StereoCamer
   };
   registration::PointCloud& cloud = result.cloud;
   // Sized once: grown point by point, a KITTI frame's 260 000 covariances were copied and
-  // faulted in again at every doubling (a fifth of a replay's time went to page faults).
+  // faulted in again at every doubling (docs/benchmarks.md, "Figures behind the frame pipeline's code").
   cloud.points.reserve(valid);
   cloud.covariances.reserve(valid);
   if (o.compute_normals) cloud.normals.reserve(valid);

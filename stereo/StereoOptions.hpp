@@ -74,7 +74,8 @@ struct StereoOptions {
   /// block's) exceeds this [m]; 0 = no limit. Not a config key: the pipeline sets it from
   /// the DEM (dem.max_horizontal_sigma_cells × dem.cell_size_m, with a margin), which would
   /// drop such points anyway. Far rows are the farthest apart, so without it most of a KITTI
-  /// frame's 1.5 million fill points were made only to be dropped.
+  /// frame's fill points were made only to be dropped (docs/benchmarks.md, "Figures behind the
+  /// frame pipeline's code").
   double fill_max_horizontal_sigma_m = 0.0;
 
   /// Voxel downsampling edge [m]; 0 = off. One fused point per occupied voxel.

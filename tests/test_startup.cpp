@@ -1,8 +1,8 @@
 // How the `rovermap` command starts (apps/Launcher.cpp, apps/main.cpp): a plain `register` runs
-// in the launcher, which loads neither GDAL nor OpenCV's image codecs (65 of a one-shot
-// register's 99 ms); everything else runs in rovermap-full, which the launcher becomes. The
-// commands that run many frames get OMP_WAIT_POLICY=PASSIVE (libgomp reads it only when it
-// loads); the one-shot ones do not (docs/benchmarks.md, "One-shot registration").
+// in the launcher, which loads neither GDAL nor OpenCV's image codecs (a start-up longer than
+// the registration's own work); everything else runs in rovermap-full, which the launcher
+// becomes. The commands that run many frames get OMP_WAIT_POLICY=PASSIVE (libgomp reads it only
+// when it loads); the one-shot ones do not (docs/benchmarks.md, "One-shot registration").
 //
 // What the process runs with is read from /proc/PID/environ while it waits, blocked, to open its
 // configuration file (--config, read before anything else): a FIFO, which it cannot open before
