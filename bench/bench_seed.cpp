@@ -5,13 +5,18 @@
 // (sim::DeadReckoningFromTruth: heading bias per metre, scale error, noise), from the truth
 // itself and from the sequence's own odometry.
 //
-//   bench_seed [--frames N] [--quick] [--config FILE] [--set key=value ...] SEQUENCE_DIR ...
+//   bench_seed [--frames N] [--quick | --truth-only] [--write-tum DIR] [--config FILE] [--set key=value ...]
+//              SEQUENCE_DIR ...
 //
 // --quick: the ground truth, the bundled odometry, 0.4 and 0.8°/m with 3 % only.
+// --truth-only: the ground-truth seed alone (and the peer), to compare settings quickly.
+// --write-tum DIR: each row's trajectory as DIR/<sequence>_<row>.tum, for a per-frame look.
 //
 // Per seed: the per-frame heading error (mean, RMS) and the final heading error [deg], the ATE
 // aligned at the first pose and SE(3)-aligned [m], the ATE's ratio to the ground-truth-seeded
-// replay's, and the seed's own figures.
+// replay's, the frames whose yaw came from dead reckoning and those that fell back to it whole,
+// and the seed's own figures.
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -23,6 +28,7 @@
 #include "config/Config.hpp"
 #include "eval/HeadingError.hpp"
 #include "eval/TrajectoryMetrics.hpp"
+#include "io/Tum.hpp"
 #include "mapper/SeedStudy.hpp"
 #include "sim/DeadReckoning.hpp"
 
@@ -50,13 +56,30 @@ void PrintRow(const std::string& name, const Poses& estimate, const Poses& truth
       yaw_from_odometry.c_str());
 }
 
+// Writes `poses`, stamped like the sequence's frames, as DIR/<sequence>_<row>.tum (row: the
+// seed's name with everything but letters and digits turned into '_').
+void WriteRow(const std::string& dir, const std::string& sequence, const std::string& row,
+              const mapper::PreloadedSequence& seq, const Poses& poses) {
+  if (dir.empty()) return;
+  std::string name = std::filesystem::path(sequence).filename().string() + "_" + row;
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  std::vector<io::StampedPose> stamped(poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    stamped[i].timestamp = seq.frames[i].timestamp;
+    stamped[i].T_world_body = poses[i];
+  }
+  std::filesystem::create_directories(dir);
+  io::WriteTum(std::filesystem::path(dir) / (name + ".tum"), stamped);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   bench::WaitPassivelyUnlessTold(argv);
   std::size_t frames = 0;
-  bool quick = false;
-  std::string config_file;
+  bool quick = false, truth_only = false;
+  std::string config_file, tum_dir;
   std::vector<std::string> overrides, sequences;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -65,6 +88,10 @@ int main(int argc, char** argv) {
         frames = static_cast<std::size_t>(std::stoul(bench::OptionValue(argc, argv, &i)));
       } else if (arg == "--quick") {
         quick = true;
+      } else if (arg == "--truth-only") {
+        truth_only = true;
+      } else if (arg == "--write-tum") {
+        tum_dir = bench::OptionValue(argc, argv, &i);
       } else if (arg == "--config") {
         config_file = bench::OptionValue(argc, argv, &i);
       } else if (arg == "--set") {
@@ -105,8 +132,8 @@ int main(int argc, char** argv) {
     }
     const Poses truth = io::PosesOf(seq.truth);
     std::vector<Seed> seeds = {{"ground truth", truth}};
-    seeds.push_back({"bundled odometry", mapper::OdometryOf(seq)});
-    for (const Model& m : models) {
+    if (!truth_only) seeds.push_back({"bundled odometry", mapper::OdometryOf(seq)});
+    for (const Model& m : truth_only ? std::vector<Model>() : models) {
       const std::string name = m.name;
       if (quick && name != "0.4°/m, 3 %" && name != "0.8°/m, 3 %") continue;
       seeds.push_back({m.name, io::PosesOf(sim::DeadReckoningFromTruth(seq.truth, m.model))});
@@ -118,7 +145,7 @@ int main(int argc, char** argv) {
       vo = bench::StereoVisualOdometry(dir, truth.front(), seq.frames.size());
     std::printf(
         "| seed | heading err/frame mean [deg] | RMS [deg] | final [deg] | ATE origin "
-        "[m] | ATE [m] | ATE / GT-seeded | yaw from DR |\n|---|---|---|---|---|---|---|---|\n");
+        "[m] | ATE [m] | ATE / GT-seeded | yaw from DR / fell back |\n|---|---|---|---|---|---|---|---|\n");
     double reference_ate = 0.0;
     for (const Seed& s : seeds) {
       const std::vector<mapper::FrameResult> results =
@@ -130,12 +157,15 @@ int main(int argc, char** argv) {
             eval::EvaluateAssociated(estimate, truth, eval::EvalOptions()).ate_origin_m.rmse;
       }
       PrintRow("registered, seed " + s.name, estimate, truth, reference_ate,
-               std::to_string(run.yaw_from_odometry));
+               std::to_string(run.yaw_from_odometry) + " / " + std::to_string(run.fell_back));
+      WriteRow(tum_dir, dir, "registered " + s.name, seq, estimate);
       if (s.name != "ground truth") PrintRow("  the seed itself", s.odometry, truth, 0.0);
       std::fflush(stdout);
     }
-    if (vo)
+    if (vo) {
       PrintRow("peer: stereo visual odometry (GFTT, KLT, PnP RANSAC)", *vo, truth, reference_ate);
+      WriteRow(tum_dir, dir, "peer vo", seq, *vo);
+    }
   }
   return 0;
 }

@@ -57,6 +57,7 @@ ChainedRun Chained(const std::vector<FrameResult>& results) {
   for (const FrameResult& r : results) {
     out.poses.push_back(r.step.T_world_body);
     out.yaw_from_odometry += r.index > 0 && (r.odometry_directions & kYaw) != 0;
+    out.fell_back += r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame;
   }
   return out;
 }

@@ -38,10 +38,12 @@ std::vector<FrameResult> RunWithOdometry(const PreloadedSequence& sequence,
 std::vector<Eigen::Isometry3d> OdometryOf(const PreloadedSequence& sequence);
 
 /// What a run chained: T_world_body per frame, and the increments whose yaw was kept from dead
-/// reckoning (there, the seed's heading error goes straight into the result).
+/// reckoning (there, the seed's heading error goes straight into the result) and the frames that
+/// fell back to it whole (registration rejected, or a bad frame).
 struct ChainedRun {
   std::vector<Eigen::Isometry3d> poses;
   int yaw_from_odometry = 0;
+  int fell_back = 0;
 };
 ChainedRun Chained(const std::vector<FrameResult>& results);
 

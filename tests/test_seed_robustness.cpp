@@ -33,6 +33,7 @@ struct Replayed {
   eval::HeadingErrors heading;
   double ate_origin_m = 0.0;
   int yaw_from_odometry = 0;  ///< increments whose yaw was dead reckoning's
+  int fell_back = 0;          ///< frames that took dead reckoning's whole increment
 };
 
 Replayed Replay(const mapper::PreloadedSequence& seq, const Poses& odometry) {
@@ -41,7 +42,7 @@ Replayed Replay(const mapper::PreloadedSequence& seq, const Poses& odometry) {
   const Poses truth = PosesOf(seq.truth);
   return {eval::CompareHeadings(run.poses, truth),
           eval::EvaluateAssociated(run.poses, truth, eval::EvalOptions()).ate_origin_m.rmse,
-          run.yaw_from_odometry};
+          run.yaw_from_odometry, run.fell_back};
 }
 
 // Each seed model against the truth-seeded replay of the same frames.
@@ -51,6 +52,9 @@ void ExpectSeedIndependent(const mapper::PreloadedSequence& seq,
   const Replayed reference = Replay(seq, PosesOf(seq.truth));
   EXPECT_EQ(reference.yaw_from_odometry, 0) << "yaw kept from the seed: the test would not see "
                                                "what registration leaves of it";
+  // A rejected registration takes the truth's increment whole: the reference would look better
+  // than registration is, and a biased seed would be held to it unfairly.
+  EXPECT_EQ(reference.fell_back, 0) << "frames fell back to the truth seed";
   std::printf(
       "truth-seeded: heading error %+.4f deg/frame (RMS %.4f), final %+.3f deg, ATE %.4f m\n",
       reference.heading.mean_deg, reference.heading.rms_deg, reference.heading.final_deg,
