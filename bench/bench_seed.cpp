@@ -132,11 +132,13 @@ int main(int argc, char** argv) {
     }
     const Poses truth = io::PosesOf(seq.truth);
     std::vector<Seed> seeds = {{"ground truth", truth}};
-    if (!truth_only) seeds.push_back({"bundled odometry", mapper::OdometryOf(seq)});
-    for (const Model& m : truth_only ? std::vector<Model>() : models) {
-      const std::string name = m.name;
-      if (quick && name != "0.4°/m, 3 %" && name != "0.8°/m, 3 %") continue;
-      seeds.push_back({m.name, io::PosesOf(sim::DeadReckoningFromTruth(seq.truth, m.model))});
+    if (!truth_only) {
+      seeds.push_back({"bundled odometry", mapper::OdometryOf(seq)});
+      for (const Model& m : models) {
+        const std::string name = m.name;
+        if (quick && name != "0.4°/m, 3 %" && name != "0.8°/m, 3 %") continue;
+        seeds.push_back({m.name, io::PosesOf(sim::DeadReckoningFromTruth(seq.truth, m.model))});
+      }
     }
 
     std::printf("\n%s, %zu frames\n\n", dir.c_str(), seq.frames.size());
