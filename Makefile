@@ -28,12 +28,14 @@ test-slurm: build
 	@bash scripts/slurm/test.sh $(BUILD)
 
 # The same suite under AddressSanitizer + UndefinedBehaviorSanitizer (-O2; -g1: the line tables
-# that a report's stack needs, with objects far smaller than full debug information's).
+# that a report's stack needs, with objects far smaller than full debug information's). Left out
+# there: the documentation's examples (label docs) and the outside project built against an
+# installed tree (label install), which check text and packaging that `make test` checks.
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DROVERMAP_SANITIZE=ON -DROVERMAP_BUILD_BENCH=OFF \
 	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -LE slurm
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS) -LE 'slurm|docs|install'
 
 # libFuzzer targets (tests/fuzz) with ASan + UBSan, built with clang in their own folder.
 fuzz-build: deps

@@ -76,6 +76,14 @@ void ExpectSeedIndependent(const mapper::PreloadedSequence& seq,
   }
 }
 
+// The sanitizer build replays only the largest bias from each sequence: the other seeds run the
+// same code again, and the Release suite holds every one of them to the bounds.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
 sim::DeadReckoningModel Model(double deg_per_m, double scale, std::uint64_t seed) {
   sim::DeadReckoningModel m;
   m.heading_bias_deg_per_m = deg_per_m;
@@ -129,7 +137,10 @@ TEST(SeedRobustness, SimulatedTraverse) {
   std::vector<sim::DeadReckoningModel> models;
   std::uint64_t seed = 1;
   for (const double bias : {0.2, 0.4, 0.8})
-    for (const double scale : {0.03, 0.10}) models.push_back(Model(bias, scale, seed++));
+    for (const double scale : {0.03, 0.10}) {
+      const sim::DeadReckoningModel m = Model(bias, scale, seed++);
+      if (!kSanitized || bias == 0.8) models.push_back(m);
+    }
   ExpectSeedIndependent(seq, models);
 }
 
@@ -138,5 +149,9 @@ TEST(SeedRobustness, SimulatedTraverse) {
 TEST(SeedRobustness, KittiStereo) {
   const mapper::PreloadedSequence seq = mapper::Preload(
       std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", Defaults(), 20);
-  ExpectSeedIndependent(seq, {Model(0.2, 0.03, 1), Model(0.4, 0.10, 2), Model(0.8, 0.03, 3)});
+  if (kSanitized) {
+    ExpectSeedIndependent(seq, {Model(0.8, 0.03, 3)});
+  } else {
+    ExpectSeedIndependent(seq, {Model(0.2, 0.03, 1), Model(0.4, 0.10, 2), Model(0.8, 0.03, 3)});
+  }
 }
