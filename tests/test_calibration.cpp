@@ -16,6 +16,7 @@
 #include "mapper/SeedStudy.hpp"
 #include "sim/Simulator.hpp"
 #include "tests/support/PipelineDefaults.hpp"
+#include "tests/support/Sanitizers.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 using namespace rovermap;
@@ -138,11 +139,10 @@ TEST(SystematicError, NoneLeavesTheChainAsItWas) {
 // no systematic part): within 2σ 0.00, NEES mean 4487 over the 51 frames
 // (the stereo scale alone: 139).
 TEST(PoseCalibration, KittiStereo) {
-#if defined(__SANITIZE_ADDRESS__)
   // The same preload and replay as SeedRobustness.KittiStereo's reference, which the sanitizer
   // suite runs; the check itself runs there in PoseCalibration.SimulatedStereo.
-  GTEST_SKIP() << "statistics only: the Release suite checks them";
-#endif
+  if (rovermap::testing::kSanitizedBuild)
+    GTEST_SKIP() << "statistics only: the Release suite checks them";
   const mapper::PreloadedSequence seq =
       mapper::Preload(std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
                       PipelineDefaultsWithoutOctoMap(), 20);

@@ -17,6 +17,7 @@
 #include "sim/DeadReckoning.hpp"
 #include "sim/Simulator.hpp"
 #include "tests/support/PipelineDefaults.hpp"
+#include "tests/support/Sanitizers.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 using namespace rovermap;
@@ -76,13 +77,8 @@ void ExpectSeedIndependent(const mapper::PreloadedSequence& seq,
   }
 }
 
-// The sanitizer build replays only the largest bias from each sequence: the other seeds run the
-// same code again, and the Release suite holds every one of them to the bounds.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
+// The sanitizer build replays only the largest bias from each sequence (support/Sanitizers.hpp).
+using rovermap::testing::kSanitizedBuild;
 
 sim::DeadReckoningModel Model(double deg_per_m, double scale, std::uint64_t seed) {
   sim::DeadReckoningModel m;
@@ -139,7 +135,7 @@ TEST(SeedRobustness, SimulatedTraverse) {
   for (const double bias : {0.2, 0.4, 0.8})
     for (const double scale : {0.03, 0.10}) {
       const sim::DeadReckoningModel m = Model(bias, scale, seed++);
-      if (!kSanitized || bias == 0.8) models.push_back(m);
+      if (!kSanitizedBuild || bias == 0.8) models.push_back(m);
     }
   ExpectSeedIndependent(seq, models);
 }
@@ -149,7 +145,7 @@ TEST(SeedRobustness, SimulatedTraverse) {
 TEST(SeedRobustness, KittiStereo) {
   const mapper::PreloadedSequence seq = mapper::Preload(
       std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", Defaults(), 20);
-  if (kSanitized) {
+  if (kSanitizedBuild) {
     ExpectSeedIndependent(seq, {Model(0.8, 0.03, 3)});
   } else {
     ExpectSeedIndependent(seq, {Model(0.2, 0.03, 1), Model(0.4, 0.10, 2), Model(0.8, 0.03, 3)});
