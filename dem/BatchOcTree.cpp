@@ -120,24 +120,31 @@ void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d
     }
   }
   // One key coordinate's bits in the code (every third bit from bit `dim`): adding or
-  // subtracting its unit there carries through that coordinate's bits alone.
+  // subtracting its unit there carries through that coordinate's bits alone. The walk's state
+  // lives in scalars, not in arrays indexed by the axis, whose store and reload per voxel chained
+  // each step to the last (docs/benchmarks.md, "Figures behind the frame pipeline's code").
   constexpr std::uint64_t kMask = 0x249249249249ULL;
-  while (true) {
-    unsigned dim;
-    if (t_max[0] < t_max[1])
-      dim = t_max[0] < t_max[2] ? 0 : 2;
-    else
-      dim = t_max[1] < t_max[2] ? 1 : 2;
-    t_max[dim] += t_delta[dim];
-    const std::uint64_t mask = kMask << dim;
-    const std::uint64_t unit = std::uint64_t{1} << dim;
+  double t0 = t_max[0], t1 = t_max[1], t2 = t_max[2];
+  const auto advance = [&code](std::uint64_t mask, std::uint64_t unit, bool up) {
     const std::uint64_t coordinate = code & mask;
     const std::uint64_t stepped =
-        step[dim] > 0 ? ((coordinate | ~mask) + unit) & mask : (coordinate - unit) & mask;
+        up ? ((coordinate | ~mask) + unit) & mask : (coordinate - unit) & mask;
     code = (code & ~mask) | stepped;
+  };
+  while (true) {
+    if (t0 < t1 && t0 < t2) {
+      t0 += t_delta[0];
+      advance(kMask, 1, step[0] > 0);
+    } else if (!(t0 < t1) && t1 < t2) {
+      t1 += t_delta[1];
+      advance(kMask << 1, 2, step[1] > 0);
+    } else {
+      t2 += t_delta[2];
+      advance(kMask << 2, 4, step[2] > 0);
+    }
     if (code == code_end) return;
     // Past the ray's length without meeting the end voxel (rounding): stop, as OctoMap does.
-    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return;
+    if (std::min(std::min(t0, t1), t2) > length) return;
     add(code);
   }
 }
