@@ -74,6 +74,7 @@ Daemon::Daemon(DaemonSetup setup) : setup_(std::move(setup)), inbox_(setup_.inbo
 }
 
 Daemon::~Daemon() {
+  if (ahead_) ahead_->second.wait();     // it reads the inbox with the mapper's options
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
 }
 
@@ -161,7 +162,8 @@ void Daemon::Run(const std::atomic<int>& stop) {
   publisher_.Wait();
   WriteStatus("stopped", waiting_);
   Log("serve: stopped after frame " + std::to_string(state_.next_index) + " (" +
-      std::to_string(processed_) + " frames this run)");
+      std::to_string(processed_) + " frames this run, " + std::to_string(read_ahead_) +
+      " of them read and prepared ahead)");
 }
 
 // One move of the queue: the frame expected next, or the frames a timed-out gap declares missing.
@@ -172,7 +174,11 @@ bool Daemon::Step(const FrameFiles& files) {
   const auto it = files.find(next);
   if (it != files.end() && it->second.Complete(sequence_.sensor_type)) {
     gap_since_.reset();
-    ProcessIndex(next, it->second);
+    const auto following = files.find(next + 1);
+    ProcessIndex(next, it->second,
+                 following != files.end() && following->second.Complete(sequence_.sensor_type)
+                     ? &following->second
+                     : nullptr);
     return true;
   }
   if (!GapTimedOut(files)) return false;
@@ -256,15 +262,40 @@ void Daemon::DeclareGapMissing(const FrameFiles& files) {
   journal_run(ready->first);
 }
 
-void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files) {
+Daemon::ReadFrame Daemon::ReadAndPrepare(std::size_t index,
+                                         const io::InboxFrameFiles& files) const {
+  ReadFrame read;
   const auto start = Clock::now();
-  io::Frame frame;
-  std::optional<std::string> unreadable;
   try {
-    frame = inbox_.Read(index, files, sequence_);
+    read.frame = inbox_.Read(index, files, sequence_);
   } catch (const io::IoError& e) {
-    unreadable = e.what();
+    read.unreadable = e.what();
+    return read;
   }
+  read.load_ms = MsBetween(start, Clock::now());
+  read.prepared = mapper_->Prepare(read.frame);
+  return read;
+}
+
+void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files,
+                          const io::InboxFrameFiles* following) {
+  const auto start = Clock::now();
+  ReadFrame read;
+  if (ahead_ && ahead_->first == index) {
+    read = ahead_->second.get();  // rethrows what ReadAndPrepare threw
+    ++read_ahead_;
+  } else {
+    if (ahead_) ahead_->second.wait();  // another frame's (the queue moved otherwise): dropped
+    read = ReadAndPrepare(index, files);
+  }
+  ahead_.reset();
+  if (following != nullptr) {
+    // The files are copied: the scan's map is gone when the task reads them.
+    ahead_.emplace(index + 1, std::async(std::launch::async, &Daemon::ReadAndPrepare, this,
+                                         index + 1, *following));
+  }
+  io::Frame& frame = read.frame;
+  std::optional<std::string> unreadable = read.unreadable;
   // Without a usable odometry line the frame has no pose at all.
   std::optional<std::string> no_pose;
   if (unreadable) {
@@ -289,12 +320,11 @@ void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files) {
     Log("serve: frame " + std::to_string(index) + " rejected, not in the trajectory: " + *no_pose);
     return;
   }
-  const double load_ms = MsBetween(start, Clock::now());
   const FrameResult result =
       unreadable
           ? mapper_->SkipFrame(index, frame.timestamp, frame.T_world_body_odom,
                                FallbackReason::kBadFrame, *unreadable, frame.T_world_body_truth)
-          : mapper_->ProcessFrame(frame, load_ms);
+          : mapper_->ProcessPrepared(frame, std::move(read.prepared), read.load_ms);
   Fault("frame:processed");
   last_timestamp_ = frame.timestamp;
   const bool bad = result.status == FrameStatus::kBadFrame;

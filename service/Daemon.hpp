@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -81,7 +82,19 @@ class Daemon {
   bool GapTimedOut(const FrameFiles& files);
   /// Declares every index before the first ready frame missing.
   void DeclareGapMissing(const FrameFiles& files);
-  void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files);
+  /// A frame read from the inbox and, when readable, prepared (Mapper::Prepare: stereo, index).
+  struct ReadFrame {
+    io::Frame frame;
+    std::optional<std::string> unreadable;  ///< why inbox_.Read failed
+    PreparedFrame prepared;
+    double load_ms = 0.0;
+  };
+  ReadFrame ReadAndPrepare(std::size_t index, const io::InboxFrameFiles& files) const;
+  /// The frame `index`: the one read ahead if that is it, else read now. `following`: the next
+  /// index's files when they are complete, read and prepared in the background meanwhile (as
+  /// replay's ReadAhead does), so that its stereo runs beside this frame's registration.
+  void ProcessIndex(std::size_t index, const io::InboxFrameFiles& files,
+                    const io::InboxFrameFiles* following);
   /// A frame of which some files came, declared missing.
   void DeclareMissing(std::size_t index, const io::InboxFrameFiles& files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
@@ -116,7 +129,11 @@ class Daemon {
   std::size_t waiting_ = 0;
   bool status_stale_ = false;  // a frame done since status.json was written
   Clock::time_point status_written_{};
-  OutputPublisher publisher_;  // last: destroyed (joined) first
+  // The frame after the one in hand, being read and prepared; destroyed (waited for) before the
+  // mapper and the inbox it uses.
+  std::optional<std::pair<std::size_t, std::future<ReadFrame>>> ahead_;
+  std::size_t read_ahead_ = 0;  // frames this session that came from ahead_
+  OutputPublisher publisher_;   // last: destroyed (joined) first
 };
 
 }  // namespace rovermap::mapper

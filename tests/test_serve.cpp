@@ -135,6 +135,22 @@ TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
   EXPECT_EQ(CountLines(Slurp(dir_ / "log"), "serve: frame "), 5);
 }
 
+// A daemon with a backlog (every frame already in the inbox) reads and prepares the next frame
+// (its stereo, its index) while it registers the one in hand, as replay does; the outputs stay
+// replay's.
+TEST_F(Serve, ABacklogIsReadAheadAndGivesReplaysOutputs) {
+  const fs::path replay = Replay(kTinyStereo);
+  const fs::path inbox = MakeInbox(kTinyStereo, 3, "inbox");
+  const fs::path out = dir_ / "out";
+  const pid_t pid = Start(inbox, out, "log");
+  ASSERT_FALSE(WaitForNext(out, 3).is_null()) << Slurp(dir_ / "log");
+  Stop(pid);
+  ExpectSameOutputs(replay, out);
+  EXPECT_NE(Slurp(dir_ / "log").find("(3 frames this run, 2 of them read and prepared ahead)"),
+            std::string::npos)
+      << Slurp(dir_ / "log");
+}
+
 // When the queue runs dry the daemon publishes what it has: the last frames' maps do not wait
 // for serve.publish_every more frames (here 100) or for the daemon to stop.
 TEST_F(Serve, AnIdleDaemonPublishesItsLastFrames) {
