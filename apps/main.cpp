@@ -36,8 +36,8 @@ int main(int argc, char** argv) {
   }
   // Every frame allocates and frees tens of MB (a KITTI frame's disparity, points, covariances).
   // glibc maps blocks that large afresh and returns freed memory to the system, so each frame
-  // paid page faults for all of it again (a tenth of a KITTI replay's time, perf). Keeping them in
-  // the heap reuses the pages: the peak stays that of the largest frame.
+  // paid page faults for all of it again (docs/benchmarks.md, "Replay on real stereo"). Kept in
+  // the heap, the pages are reused: the peak stays that of the largest frames in flight.
   if (RunsManyFrames(argc, argv)) {
     ::mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap
     ::mallopt(M_TRIM_THRESHOLD, 1 << 30);   // never give the heap's free top back mid-run
