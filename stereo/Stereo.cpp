@@ -1,4 +1,3 @@
-#include "core/Stopwatch.hpp"
 #include "stereo/Stereo.hpp"
 
 #include <Eigen/Cholesky>
@@ -13,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/Stopwatch.hpp"
 #include "dem/ElevationMap.hpp"
 #include "registration/VoxelGrid.hpp"
 
@@ -21,7 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using core::MsSince;
-
 
 cv::Mat ToGrey(const cv::Mat& image) {
   if (image.channels() == 1) return image;
@@ -109,7 +108,8 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
   const Eigen::Matrix<double, 2, 3> horizontal = R.topRows<2>();  // body x, y of a sensor vector
   // Room for twice the measured points (KITTI's frames: 1.6 times): grown point by point, the
   // fill's covariances were copied again at every doubling, with the page faults of each new
-  // block (docs/benchmarks.md, "Figures behind the frame pipeline's code"). Pages never written cost nothing.
+  // block (docs/benchmarks.md, "Figures behind the frame pipeline's code"). Pages never written
+  // cost nothing.
   const std::size_t room = fill->points.size() + 2 * cloud.size();
   fill->points.reserve(room);
   fill->covariances.reserve(room);
@@ -129,6 +129,11 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
         // 18 px, which that rule reads as an edge; occlusion edges step by more.
         const double step = std::abs(fb / q.z() - fb / p.z());
         if (step > o.fill_max_step_px) continue;
+        // Neighbours closer than the spacing (most of the near field) need no point between.
+        const double gap = (q - p).norm();
+        const int n =
+            std::min(kMaxFillPerPair, static_cast<int>(std::ceil(gap / o.fill_spacing_m)) - 1);
+        if (n <= 0) continue;
         // A point between two pixels may be off by half their disparity step (a locked run's
         // step is mostly error), beyond the disparity noise of either.
         const double sigma_d = std::hypot(o.disparity_sigma_px, 0.5 * step);
@@ -146,9 +151,6 @@ void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
                            horizontal, PointCovariance(p_nearer ? q : p, camera, sigma_d,
                                                        o.pixel_sigma_px)) > max_h_sq;
         }
-        const double gap = (q - p).norm();
-        const int n =
-            std::min(kMaxFillPerPair, static_cast<int>(std::ceil(gap / o.fill_spacing_m)) - 1);
         for (int k = 1; k <= n; ++k) {
           const double t = static_cast<double>(k) / (n + 1);
           const Eigen::Vector3d x = p + t * (q - p);
@@ -383,7 +385,8 @@ StereoPointsResult DisparityToPoints(const cv::Mat& disparity, const StereoCamer
   };
   registration::PointCloud& cloud = result.cloud;
   // Sized once: grown point by point, a KITTI frame's 260 000 covariances were copied and
-  // faulted in again at every doubling (docs/benchmarks.md, "Figures behind the frame pipeline's code").
+  // faulted in again at every doubling (docs/benchmarks.md, "Figures behind the frame pipeline's
+  // code").
   cloud.points.reserve(valid);
   cloud.covariances.reserve(valid);
   if (o.compute_normals) cloud.normals.reserve(valid);
