@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   // user's setting is kept). Only for the commands that run many frames: loading the program's
   // libraries again (GDAL's among them) would cost a one-shot command more than spinning does
   // (docs/benchmarks.md, "One-shot registration").
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr && RunsManyFrames(argc, argv)) {
+  const bool many_frames = RunsManyFrames(argc, argv);
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr && many_frames) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
   }
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
   // glibc maps blocks that large afresh and returns freed memory to the system, so each frame
   // paid page faults for all of it again (docs/benchmarks.md, "Replay on real stereo"). Kept in
   // the heap, the pages are reused: the peak stays that of the largest frames in flight.
-  if (RunsManyFrames(argc, argv)) {
+  if (many_frames) {
     ::mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap
     ::mallopt(M_TRIM_THRESHOLD, 1 << 30);   // never give the heap's free top back mid-run
     ::mallopt(M_TOP_PAD, 64 << 20);         // grow a heap in large steps

@@ -295,7 +295,7 @@ void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files,
                                          index + 1, *following));
   }
   io::Frame& frame = read.frame;
-  std::optional<std::string> unreadable = read.unreadable;
+  const std::optional<std::string>& unreadable = read.unreadable;
   // Without a usable odometry line the frame has no pose at all.
   std::optional<std::string> no_pose;
   if (unreadable) {
