@@ -262,6 +262,8 @@ std::vector<KeyEntry> BuildRegistry() {
                 "a frame's points in one cell weigh as one measurement");
   dem_keys.Bool("slope_aware_variance", &D::slope_aware_variance,
                 "height variance along the surface normal and the slope to the cell centre");
+  dem_keys.Bool("attitude_error_shared", &D::attitude_error_shared,
+                "the pose's roll and pitch error does not average out over a cell's frames");
 
   using O = dem::OctoMapOptions;
   SectionKeys<O> octo(keys, "octomap", &Config::octomap);

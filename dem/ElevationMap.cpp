@@ -19,12 +19,15 @@ namespace {
 }
 
 // Kalman update of a constant height observed directly (H = 1).
-void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
+// `shared` is the part of r that the hypothesis' earlier points share with this one (their
+// frames' attitude error): the update cannot average it away, so the variance stays at least
+// min(shared, p).
+void KalmanUpdate(float* height_m, float* variance_m2, double z, double r, double shared) {
   const double h = *height_m;
   const double p = *variance_m2;
   const double k = p / (p + r);
   *height_m = static_cast<float>(h + k * (z - h));
-  *variance_m2 = static_cast<float>((1.0 - k) * p);
+  *variance_m2 = static_cast<float>(std::max((1.0 - k) * p, std::min(shared, p)));
 }
 
 }  // namespace
@@ -223,7 +226,7 @@ bool ElevationMap::CandidateTakesOver(const CellRecord& record) const {
 }
 
 bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
-                          FusionStats* stats) {
+                          FusionStats* stats, double shared_m2) {
   Tile& tile = TileFor(index_.CellToTile(cell), stats);
   CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
   CellValue& v = record.value;
@@ -239,12 +242,12 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
   }
   bool into_primary = true;
   if (WithinGate(v.elevation_m, v.variance_m2, z, r)) {
-    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r_update);
+    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r_update, shared_m2);
     ++v.count;
     v.last_frame = frame;
     if (stats != nullptr) ++stats->fused;
   } else if (c.count > 0 && WithinGate(c.height_m, c.variance_m2, z, r)) {
-    KalmanUpdate(&c.height_m, &c.variance_m2, z, r_update);
+    KalmanUpdate(&c.height_m, &c.variance_m2, z, r_update, shared_m2);
     ++c.count;
     if (!CandidateTakesOver(record)) {
       into_primary = false;
@@ -316,6 +319,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   struct Fusable {
     std::size_t k;
     double r;
+    double shared;  // the attitude's share of r (attitude_error_shared), else 0
   };
   std::vector<Fusable> fusable;
   std::vector<CellIndex> cells;
@@ -351,15 +355,20 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
     const Eigen::Matrix3d* cov = use_cov ? &covariances[k] : nullptr;
     double r =
         HeightVariance(p, cov, use_normals ? &(*ctx.normals)[k] : nullptr, ctx.R_world_cov, *cell);
+    double shared = 0.0;
     if (use_pose) {
       const Eigen::Vector3d j(p.y() - c.y(), -(p.x() - c.x()), 1.0);
       r += j.dot(pose_block * j);
+      if (options_.attitude_error_shared) {
+        const Eigen::Vector2d ja = j.head<2>();
+        shared = ja.dot(pose_block.topLeftCorner<2, 2>() * ja);
+      }
     }
     if (!std::isfinite(r) || r < 0.0) {
       ++stats.dropped_nonfinite;
       continue;
     }
-    fusable.push_back({k, std::max(r, options_.min_point_variance_m2)});
+    fusable.push_back({k, std::max(r, options_.min_point_variance_m2), shared});
     cells.push_back(*cell);
   }
 
@@ -369,7 +378,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   for (std::size_t i = 0; i < fusable.size(); ++i) {
     const Fusable& f = fusable[i];
     const double m = counts.empty() ? 1.0 : static_cast<double>(counts[i]);
-    FuseAt(cells[i], points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats);
+    FuseAt(cells[i], points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats, f.shared);
   }
   stats.points -= fill_skipped;
   return stats;

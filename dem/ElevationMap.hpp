@@ -90,6 +90,13 @@ struct ElevationMapOptions {
   /// ((n_x·d_x + n_y·d_y) / n_z)², d its horizontal offset from the cell centre (the slope
   /// between where it lies and where the cell's height is read). n_z is floored at 0.3 (73°).
   bool slope_aware_variance = true;
+  /// The pose's roll and pitch error (FrameContext::pose_covariance) is shared by the frames
+  /// that see a cell (the chain's attitude is held to dead reckoning's gravity-referenced one,
+  /// so its error is an offset that neighbouring frames repeat, not noise that averages out):
+  /// true keeps a cell's variance from falling below the attitude's share of the updating
+  /// point's variance (nor below what it was before the update). Its position share still
+  /// averages over frames. docs/maps.md, "The published σ".
+  bool attitude_error_shared = true;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.
   double grid_rotation_rad = 0.0;
@@ -299,9 +306,10 @@ class ElevationMap {
 
  private:
   Tile& TileFor(TileIndex tile_index, FusionStats* stats);
-  // r gates the point, r_update is its variance in the Kalman update (>= r).
+  // r gates the point, r_update is its variance in the Kalman update (>= r); an update leaves
+  // the hypothesis' variance at least min(shared_m2, its variance before).
   bool FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
-              FusionStats* stats);
+              FusionStats* stats, double shared_m2 = 0.0);
   bool WithinGate(double h, double p, double z, double r) const;
   // A point's height variance before the pose term (FuseFrame; normal may be null).
   double HeightVariance(const Eigen::Vector3d& p, const Eigen::Matrix3d* covariance,

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 
 #include "config/Config.hpp"
 #include "mapper/PoseChain.hpp"
@@ -135,32 +136,55 @@ TEST(SystematicError, NoneLeavesTheChainAsItWas) {
 
 // ---- the data -------------------------------------------------------------------------------
 
-// Real stereo: the bundled KITTI excerpt, its own odometry. Before (no stereo covariance scale,
-// no systematic part): within 2σ 0.00, NEES mean 4487 over the 51 frames
-// (the stereo scale alone: 139).
+// Real stereo: the bundled KITTI excerpt, its own odometry, its 51 frames. Before (no stereo
+// covariance scale, no systematic part): within 2σ 0.00, NEES mean 4487 (the stereo scale
+// alone: 139). With the defaults: 0.94, NEES 8.0 (its first 20 frames alone: 0.842 at the
+// scales 2 to 25, 0.895 at 50: one frame's difference).
 TEST(PoseCalibration, KittiStereo) {
-  // The same preload and replay as SeedRobustness.KittiStereo's reference, which the sanitizer
-  // suite runs; the check itself runs there in PoseCalibration.SimulatedStereo.
   if (rovermap::testing::kSanitizedBuild)
     GTEST_SKIP() << "statistics only: the Release suite checks them";
-  const mapper::PreloadedSequence seq =
-      mapper::Preload(std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
-                      PipelineDefaultsWithoutOctoMap(), 20);
-  const mapper::CalibrationCheck c = Calibration(seq, "kitti_stereo51, 20 frames");
+  const mapper::PreloadedSequence seq = mapper::Preload(
+      std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", PipelineDefaultsWithoutOctoMap());
+  const mapper::CalibrationCheck c = Calibration(seq, "kitti_stereo51");
   EXPECT_GE(c.within_2sigma, 0.85);
+  EXPECT_LE(c.within_2sigma, 0.99);
   EXPECT_LE(c.nees_mean, 12.0);
   EXPECT_GE(c.nees_mean, 2.0);
 }
 
-// The simulator's stereo traverse: calibrated rig, so the systematic part (KITTI's) makes it
-// conservative: every frame within 2σ, NEES about 1 (it was 0.10 and 128).
-TEST(PoseCalibration, SimulatedStereo) {
-  const std::filesystem::path dir = rovermap::testing::ScratchDir() / "sim_stereo";
-  config::Config cfg;
-  cfg.sim.frames = 12;
-  sim::Simulator(cfg.sim).WriteSequence(dir, {});
-  const mapper::CalibrationCheck c =
-      Calibration(mapper::Preload(dir, PipelineDefaultsWithoutOctoMap()), "sim stereo");
-  EXPECT_GE(c.within_2sigma, 0.85);
-  EXPECT_GE(c.nees_mean, 0.3);
+// The simulator's stereo. One traverse's frames share their errors (each pose is the last one's
+// plus a step), so one traverse's fraction within 2σ is a noisy sample of the calibration:
+// 0.32 to 1.00 over seeds 1–8 with mapper.stereo_covariance_scale at 2, every one 1.00 at 50.
+// Pooled over those eight traverses of 20 frames: 0.954, NEES 4.2 with the default 10 (0.757 at
+// 2, 1.000 at 50; docs/replay.md, "Known limits"). Seeds 1–4 here (a traverse takes 8 s to
+// render): 0.974, NEES 4.1 (0.71 at 2, 1.00 at 50).
+TEST(PoseCalibration, SimulatedStereoTraverses) {
+  // Under the sanitizers one traverse: the code path, not the statistics.
+  const int seeds = rovermap::testing::kSanitizedBuild ? 1 : 4;
+  std::size_t frames = 0;
+  double within = 0.0, nees = 0.0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const std::filesystem::path dir =
+        rovermap::testing::ScratchDir() / ("sim_stereo_" + std::to_string(seed));
+    config::Config cfg;
+    cfg.sim.frames = 20;
+    cfg.sim.seed = seed;
+    sim::Simulator(cfg.sim).WriteSequence(dir, {});
+    const std::string what = "sim stereo, seed " + std::to_string(seed);
+    const mapper::CalibrationCheck c =
+        Calibration(mapper::Preload(dir, PipelineDefaultsWithoutOctoMap()), what.c_str());
+    frames += c.frames;
+    within += c.within_2sigma * static_cast<double>(c.frames);
+    nees += c.nees_mean * static_cast<double>(c.frames);
+  }
+  ASSERT_GT(frames, 0u);
+  within /= static_cast<double>(frames);
+  nees /= static_cast<double>(frames);
+  std::printf("sim stereo, %d traverses: %zu frames, within 2 sigma %.3f, NEES mean %.2f\n",
+              seeds, frames, within, nees);
+  if (rovermap::testing::kSanitizedBuild) return;
+  EXPECT_GE(within, 0.85);
+  EXPECT_LE(within, 0.99);
+  EXPECT_GE(nees, 2.0);
+  EXPECT_LE(nees, 12.0);
 }

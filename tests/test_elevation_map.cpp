@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -627,6 +628,70 @@ TEST(ElevationMap, CovarianceProjectionAndPoseUncertainty) {
   EXPECT_NEAR(map.VarianceAt(3.01, 0.01), 0.0004 + 3.01 * 3.01 * 0.01 + 1e-4, 1e-8);
   // Pitch hardly moves a point beside the sensor.
   EXPECT_NEAR(map.VarianceAt(0.01, 2.01), 0.0004 + 0.01 * 0.01 * 0.01 + 1e-4, 1e-9);
+}
+
+// The frames that see a cell repeat the chain's attitude error (one draw per traverse here,
+// as the attitude prior makes it an offset): averaging it over frames as if it were each
+// frame's own would shrink σ by the frame count. Monte Carlo: a flat row of cells 1–5 m beside
+// the sensor, 8 frames each with one point per cell (σ 1 cm) and the same roll error drawn from
+// the stated N(0, 0.2°²); the fraction of cells within 2σ of the truth must be about 0.95.
+double WithinTwoSigmaUnderASharedRollError(bool shared) {
+  ElevationMapOptions options = Support(1);
+  options.attitude_error_shared = shared;
+  constexpr double kRollSigma = 0.2 * M_PI / 180.0;
+  constexpr double kPointSigma = 0.01;
+  Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
+  pose(0, 0) = kRollSigma * kRollSigma;
+  const Eigen::Matrix3d point_cov = Eigen::Matrix3d::Identity() * kPointSigma * kPointSigma;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  int within = 0, cells = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    ElevationMap map(options);
+    const double roll = kRollSigma * unit(rng);
+    for (std::uint32_t f = 0; f < 8; ++f) {
+      std::vector<Eigen::Vector3d> points;
+      for (int i = 0; i < 40; ++i) {
+        const double y = 1.0 + 0.1 * i + 0.025;  // cell centres, 5 cm cells
+        // A roll δ about the sensor's x axis raises a point y beside it by y·δ (J above).
+        points.emplace_back(0.025, y, y * roll + kPointSigma * unit(rng));
+      }
+      FrameContext ctx = Frame(f);
+      ctx.pose_covariance = pose;
+      map.FuseFrame(points, std::vector<Eigen::Matrix3d>(points.size(), point_cov), ctx);
+    }
+    map.ForEachCell([&](CellIndex, const CellValue& v) {
+      ++cells;
+      if (std::abs(v.elevation_m) <= 2.0 * std::sqrt(v.variance_m2)) ++within;
+    });
+  }
+  EXPECT_EQ(cells, 300 * 40);
+  return static_cast<double>(within) / cells;
+}
+
+TEST(ElevationMap, SharedAttitudeErrorKeepsSigmaHonest) {
+  const double shared = WithinTwoSigmaUnderASharedRollError(true);
+  const double averaged = WithinTwoSigmaUnderASharedRollError(false);
+  RecordProperty("within_2sigma_shared", std::to_string(shared));
+  RecordProperty("within_2sigma_averaged", std::to_string(averaged));
+  EXPECT_GT(shared, 0.93);
+  EXPECT_LT(shared, 0.98);
+  // Averaged over the 8 frames as independent errors, σ is about √8 too small.
+  EXPECT_LT(averaged, 0.75);
+}
+
+// An update never raises a cell's variance, whatever attitude share the new point brings.
+TEST(ElevationMap, SharedAttitudeErrorNeverRaisesACellsVariance) {
+  ElevationMap map(Support(1));
+  FrameContext first = Frame(0);
+  map.FuseFrame({{0.025, 2.025, 0.0}}, {Eigen::Matrix3d::Identity() * 1e-6}, first);
+  const double before = map.Cell({0, 40})->variance_m2;
+  FrameContext later = Frame(1);
+  Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
+  pose(0, 0) = 0.01;  // 0.1 rad of roll: 0.04 m² at 2 m, far above the cell's variance
+  later.pose_covariance = pose;
+  map.FuseFrame({{0.025, 2.025, 0.0}}, {Eigen::Matrix3d::Identity() * 1e-6}, later);
+  EXPECT_LE(map.Cell({0, 40})->variance_m2, before);
 }
 
 TEST(ElevationMap, RotatedGridRoundTrips) {
