@@ -19,15 +19,19 @@ namespace {
 }
 
 // Kalman update of a constant height observed directly (H = 1).
-// `shared` is the part of r that the hypothesis' earlier points share with this one (their
-// frames' attitude error): the update cannot average it away, so the variance stays at least
-// min(shared, p).
-void KalmanUpdate(float* height_m, float* variance_m2, double z, double r, double shared) {
+void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
   const double h = *height_m;
   const double p = *variance_m2;
   const double k = p / (p + r);
   *height_m = static_cast<float>(h + k * (z - h));
-  *variance_m2 = static_cast<float>(std::max((1.0 - k) * p, std::min(shared, p)));
+  *variance_m2 = static_cast<float>((1.0 - k) * p);
+}
+
+// `shared` is the part of the point's variance that the cell's earlier points share with it
+// (their frames' attitude error): averaging cannot remove it, so the published variance stays
+// at least min(shared, what it was), never rising with an update.
+float PublishedVariance(float fused, float published_before, double shared) {
+  return std::max(fused, static_cast<float>(std::min(shared, static_cast<double>(published_before))));
 }
 
 }  // namespace
@@ -234,27 +238,30 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
   const auto zf = static_cast<float>(z);
   const auto rf = static_cast<float>(r_update);
   if (v.count == 0) {
-    v = {zf, rf, zf, zf, 1, frame, frame};
+    v = {zf, rf, zf, zf, 1, frame, frame, rf};
     ++tile.filled;
     bounds_.Extend(cell);
     if (stats != nullptr) ++stats->fused;
     return true;
   }
   bool into_primary = true;
-  if (WithinGate(v.elevation_m, v.variance_m2, z, r)) {
-    KalmanUpdate(&v.elevation_m, &v.variance_m2, z, r_update, shared_m2);
+  if (WithinGate(v.elevation_m, v.fused_variance_m2, z, r)) {
+    KalmanUpdate(&v.elevation_m, &v.fused_variance_m2, z, r_update);
+    v.variance_m2 = PublishedVariance(v.fused_variance_m2, v.variance_m2, shared_m2);
     ++v.count;
     v.last_frame = frame;
     if (stats != nullptr) ++stats->fused;
   } else if (c.count > 0 && WithinGate(c.height_m, c.variance_m2, z, r)) {
-    KalmanUpdate(&c.height_m, &c.variance_m2, z, r_update, shared_m2);
+    KalmanUpdate(&c.height_m, &c.variance_m2, z, r_update);
     ++c.count;
     if (!CandidateTakesOver(record)) {
       into_primary = false;
       if (stats != nullptr) ++stats->candidate;
     } else {
+      // The candidate keeps only its fused variance; the new primary publishes it as it is.
       std::swap(v.elevation_m, c.height_m);
-      std::swap(v.variance_m2, c.variance_m2);
+      std::swap(v.fused_variance_m2, c.variance_m2);
+      v.variance_m2 = v.fused_variance_m2;
       std::swap(v.count, c.count);
       std::swap(v.first_frame, c.start_frame);
       v.last_frame = frame;
@@ -421,7 +428,8 @@ void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m
   const auto zf = static_cast<float>(elevation_m);
   record = CellRecord{};
   const auto span = static_cast<std::uint32_t>(options_.min_frame_span - 1);
-  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame + span, frame};
+  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame + span, frame,
+                  static_cast<float>(variance_m2)};
   if (!was_filled) ++tile.filled;
   bounds_.Extend(cell);
 }
@@ -460,9 +468,10 @@ bool ElevationMap::Published(CellIndex cell, const CellValue& value) const {
       }
       if (neighbour == nullptr || !Supported(*neighbour)) continue;
       const double step = std::abs(static_cast<double>(neighbour->elevation_m) - value.elevation_m);
+      // The fused variances: an attitude error the two cells share moves both alike.
       const double three_sigma =
-          3.0 * std::sqrt(std::max(0.0, static_cast<double>(neighbour->variance_m2) +
-                                            static_cast<double>(value.variance_m2)));
+          3.0 * std::sqrt(std::max(0.0, static_cast<double>(neighbour->fused_variance_m2) +
+                                            static_cast<double>(value.fused_variance_m2)));
       if (step <= std::max(options_.neighbor_step_m, three_sigma) &&
           ++agreeing >= options_.min_agreeing_neighbors) {
         return true;

@@ -122,12 +122,17 @@ inline double LargestHorizontalVariance(const Eigen::Matrix<double, 2, 3>& horiz
 struct CellValue {
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
   float elevation_m = kEmpty;     ///< fused height [m] (world z)
-  float variance_m2 = kEmpty;     ///< variance of elevation_m [m^2]
+  /// Variance of elevation_m as published [m^2]: fused_variance_m2, kept from falling below the
+  /// attitude's share (ElevationMapOptions::attitude_error_shared).
+  float variance_m2 = kEmpty;
   float min_m = kEmpty;           ///< lowest point taken into either hypothesis [m]
   float max_m = kEmpty;           ///< highest such point [m]
   std::uint32_t count = 0;        ///< points fused into the current estimate
   std::uint32_t last_frame = 0;   ///< frame of the last update
   std::uint32_t first_frame = 0;  ///< frame of the first point of the current estimate
+  /// The fusion's own variance [m^2], every frame's error averaged as independent: what the
+  /// gate and the Kalman gain read, so that sharing the attitude's error changes σ, not heights.
+  float fused_variance_m2 = kEmpty;
   bool Empty() const { return count == 0; }
 };
 
@@ -139,14 +144,14 @@ struct CellCandidate {
   std::uint32_t start_frame = 0;          ///< frame of its first point
 };
 
-/// One cell as stored: the primary's layers, then the candidate. 44 bytes, no
-/// padding; docs/benchmarks.md ("Maps") gives its fusion speed against a 48-byte aligned
-/// one.
+/// One cell as stored: the primary's layers, then the candidate. 48 bytes, no
+/// padding (44 before the published and the fused variance were told apart; docs/benchmarks.md,
+/// "Maps").
 struct CellRecord {
   CellValue value;
   CellCandidate candidate;
 };
-static_assert(sizeof(CellRecord) == 44, "CellRecord: keep the layout compact (see above)");
+static_assert(sizeof(CellRecord) == 48, "CellRecord: keep the layout compact (see above)");
 
 /// Storage of one tile: tile_cells² records, row-major, rows south to north
 /// (GridIndex::LinearIndex).
@@ -307,7 +312,7 @@ class ElevationMap {
  private:
   Tile& TileFor(TileIndex tile_index, FusionStats* stats);
   // r gates the point, r_update is its variance in the Kalman update (>= r); an update leaves
-  // the hypothesis' variance at least min(shared_m2, its variance before).
+  // the primary's published variance at least min(shared_m2, what it was before).
   bool FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
               FusionStats* stats, double shared_m2 = 0.0);
   bool WithinGate(double h, double p, double z, double r) const;

@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '4'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '5'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
