@@ -227,22 +227,35 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
               {"dead reckoning used (fallback / bad frame)", kRed}},
              {translation.area.x + 15, translation.area.y + 20});
 
-  // Panel 3: drift against distance.
+  // Panel 3: drift against distance, with the position uncertainty the chain states (2 √tr of
+  // its position covariance: an error above it is one the covariance did not expect).
+  std::vector<double> two_sigma;
+  for (const FrameResult& r : results) {
+    const double variance = r.step.covariance.bottomRightCorner<3, 3>().trace();
+    two_sigma.push_back(2.0 * std::sqrt(std::max(0.0, variance)));
+  }
+  const std::string sigma_label = "registered: 2 sigma it states (2 sqrt trace, position)";
+  const cv::Scalar sigma_colour = Colour(2);
   std::vector<std::pair<std::string, cv::Scalar>> legend;
   const cv::Rect area(80, 740, 800, 360);
   if (drift && drift->registered.status == eval::MetricStatus::kOk &&
       drift->odometry.status == eval::MetricStatus::kOk) {
     const auto& reg = drift->registered;
     const auto& odo = drift->odometry;
-    const double y1 = std::max(peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m)) *
-                      LegendHeadroom(area.height, 2);
+    // One error per frame when every frame has ground truth; else no σ line.
+    const bool with_sigma = reg.distance_m.size() == two_sigma.size();
+    const double y1 = std::max({peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m),
+                                with_sigma ? peak(two_sigma) : 0.0}) *
+                      LegendHeadroom(area.height, with_sigma ? 3 : 2);
     const Axes axes{area, 0.0, std::max(reg.distance_m.back(), 1e-6), 0.0, y1};
     DrawAxes(img, axes, "distance travelled (ground truth) [m]",
              "position error against the ground truth, aligned at the first pose [m]");
     DrawLine(img, axes, odo.distance_m, odo.ate_origin_error_m, Colour(0), 2);
+    if (with_sigma) DrawLine(img, axes, reg.distance_m, two_sigma, sigma_colour, 1);
     DrawLine(img, axes, reg.distance_m, reg.ate_origin_error_m, Colour(1), 2);
     legend = {{"dead reckoning (ATE origin " + Format(odo.ate_origin_m.rmse) + " m)", Colour(0)},
               {"registered (ATE origin " + Format(reg.ate_origin_m.rmse) + " m)", Colour(1)}};
+    if (with_sigma) legend.emplace_back(sigma_label, sigma_colour);
   } else {
     std::vector<double> distance, correction;
     double travelled = 0.0;
@@ -252,11 +265,13 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
       correction.push_back(r.step.cumulative_correction.translation().norm());
     }
     const Axes axes{area, 0.0, std::max(travelled, 1e-6), 0.0,
-                    peak(correction) * LegendHeadroom(area.height, 1)};
+                    std::max(peak(correction), peak(two_sigma)) * LegendHeadroom(area.height, 2)};
     DrawAxes(img, axes, "distance travelled (registered) [m]",
              "cumulative correction of dead reckoning [m]");
+    DrawLine(img, axes, distance, two_sigma, sigma_colour, 1);
     DrawLine(img, axes, distance, correction, Colour(1), 2);
-    legend = {{"|registered - dead reckoning| (no ground truth)", Colour(1)}};
+    legend = {{"|registered - dead reckoning| (no ground truth)", Colour(1)},
+              {sigma_label, sigma_colour}};
   }
   DrawLegend(img, legend, {area.x + 15, area.y + 20});
   WritePng(path, img);
