@@ -31,7 +31,8 @@ void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
 // (their frames' attitude error): averaging cannot remove it, so the published variance stays
 // at least min(shared, what it was), never rising with an update.
 float PublishedVariance(float fused, float published_before, double shared) {
-  return std::max(fused, static_cast<float>(std::min(shared, static_cast<double>(published_before))));
+  return std::max(fused,
+                  static_cast<float>(std::min(shared, static_cast<double>(published_before))));
 }
 
 }  // namespace
@@ -428,8 +429,8 @@ void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m
   const auto zf = static_cast<float>(elevation_m);
   record = CellRecord{};
   const auto span = static_cast<std::uint32_t>(options_.min_frame_span - 1);
-  record.value = {zf, static_cast<float>(variance_m2), zf, zf, n, frame + span, frame,
-                  static_cast<float>(variance_m2)};
+  record.value = {zf,    static_cast<float>(variance_m2), zf, zf, n, frame + span,
+                  frame, static_cast<float>(variance_m2)};
   if (!was_filled) ++tile.filled;
   bounds_.Extend(cell);
 }

@@ -121,7 +121,7 @@ inline double LargestHorizontalVariance(const Eigen::Matrix<double, 2, 3>& horiz
 /// variance, min and max and count 0.
 struct CellValue {
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
-  float elevation_m = kEmpty;     ///< fused height [m] (world z)
+  float elevation_m = kEmpty;  ///< fused height [m] (world z)
   /// Variance of elevation_m as published [m^2]: fused_variance_m2, kept from falling below the
   /// attitude's share (ElevationMapOptions::attitude_error_shared).
   float variance_m2 = kEmpty;

@@ -143,8 +143,9 @@ TEST(SystematicError, NoneLeavesTheChainAsItWas) {
 TEST(PoseCalibration, KittiStereo) {
   if (rovermap::testing::kSanitizedBuild)
     GTEST_SKIP() << "statistics only: the Release suite checks them";
-  const mapper::PreloadedSequence seq = mapper::Preload(
-      std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", PipelineDefaultsWithoutOctoMap());
+  const mapper::PreloadedSequence seq =
+      mapper::Preload(std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
+                      PipelineDefaultsWithoutOctoMap());
   const mapper::CalibrationCheck c = Calibration(seq, "kitti_stereo51");
   EXPECT_GE(c.within_2sigma, 0.85);
   EXPECT_LE(c.within_2sigma, 0.99);
@@ -180,8 +181,8 @@ TEST(PoseCalibration, SimulatedStereoTraverses) {
   ASSERT_GT(frames, 0u);
   within /= static_cast<double>(frames);
   nees /= static_cast<double>(frames);
-  std::printf("sim stereo, %d traverses: %zu frames, within 2 sigma %.3f, NEES mean %.2f\n",
-              seeds, frames, within, nees);
+  std::printf("sim stereo, %d traverses: %zu frames, within 2 sigma %.3f, NEES mean %.2f\n", seeds,
+              frames, within, nees);
   if (rovermap::testing::kSanitizedBuild) return;
   EXPECT_GE(within, 0.85);
   EXPECT_LE(within, 0.99);

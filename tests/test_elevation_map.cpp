@@ -696,9 +696,8 @@ TEST(ElevationMap, SharedAttitudeErrorLeavesTheHeightsAsTheyWere) {
   std::normal_distribution<double> noise(0.0, 0.01);
   for (std::uint32_t f = 0; f < 6; ++f) {
     // A slope with 2 % outliers 0.3 m high: the gate and the candidates have work to do.
-    std::vector<Eigen::Vector3d> points =
-        Sample([](double x, double y) { return 0.1 * x + 0.05 * y; }, 0.5, 3.0, -1.0, 1.0, 3000,
-               10 + f);
+    std::vector<Eigen::Vector3d> points = Sample(
+        [](double x, double y) { return 0.1 * x + 0.05 * y; }, 0.5, 3.0, -1.0, 1.0, 3000, 10 + f);
     for (std::size_t i = 0; i < points.size(); ++i)
       points[i].z() += (i % 50 == 0 ? 0.3 : 0.0) + noise(rng);
     FrameContext ctx = Frame(f);
