@@ -93,9 +93,10 @@ struct ElevationMapOptions {
   /// The pose's roll and pitch error (FrameContext::pose_covariance) is shared by the frames
   /// that see a cell (the chain's attitude is held to dead reckoning's gravity-referenced one,
   /// so its error is an offset that neighbouring frames repeat, not noise that averages out):
-  /// true keeps a cell's variance from falling below the attitude's share of the updating
-  /// point's variance (nor below what it was before the update). Its position share still
-  /// averages over frames. docs/maps.md, "The published σ".
+  /// true keeps a cell's published variance (CellValue::variance_m2) from falling below the
+  /// attitude's share of the updating point's variance, or below what it was before the
+  /// update; the fusion's own variance, hence the heights, are unchanged. Its position share
+  /// still averages over frames. docs/maps.md, "The published σ".
   bool attitude_error_shared = true;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.

@@ -231,8 +231,8 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
   // its position covariance: an error above it is one the covariance did not expect).
   std::vector<double> two_sigma;
   for (const FrameResult& r : results) {
-    const double variance = r.step.covariance.bottomRightCorner<3, 3>().trace();
-    two_sigma.push_back(2.0 * std::sqrt(std::max(0.0, variance)));
+    const PoseSigmas s = SigmasOf(r.step);  // drift.csv's σ columns
+    two_sigma.push_back(2.0 * std::sqrt(s.x_m * s.x_m + s.y_m * s.y_m + s.z_m * s.z_m));
   }
   const std::string sigma_label = "registered: 2 sigma it states (2 sqrt trace, position)";
   const cv::Scalar sigma_colour = Colour(2);
