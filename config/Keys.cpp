@@ -317,6 +317,14 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "odometry rotation sigma per metre of step");
   map.Double("odometry_sigma_rotation_deg", &P::odometry_sigma_rotation_deg, "deg", AtLeast(0),
              "odometry rotation sigma per step (floor)");
+  map.Double("odometry_noise_translation_ratio", &P::odometry_noise_translation_ratio, "ratio",
+             AtLeast(0), "odometry's typical translation error per metre of step (covariance)");
+  map.Double("odometry_noise_translation_m", &P::odometry_noise_translation_m, "m", AtLeast(0),
+             "odometry's typical translation error per step (floor)");
+  map.Double("odometry_noise_rotation_deg_per_m", &P::odometry_noise_rotation_deg_per_m, "deg/m",
+             AtLeast(0), "odometry's typical rotation error per metre of step (covariance)");
+  map.Double("odometry_noise_rotation_deg", &P::odometry_noise_rotation_deg, "deg", AtLeast(0),
+             "odometry's typical rotation error per step (floor)");
   map.Double("odometry_attitude_sigma_deg", &P::odometry_attitude_sigma_deg, "deg", AtLeast(0),
              "dead reckoning's roll and pitch as absolute, this sigma; 0 = chain alone");
   map.Double("registration_attitude_sigma_deg", &P::registration_attitude_sigma_deg, "deg",

@@ -72,6 +72,7 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
     out.T = T_predicted;
     out.odometry_directions = kRoll | kPitch | kYaw | kX | kY | kZ;
     out.covariance = odometry_covariance;
+    out.prediction_projector = Matrix6d::Identity();
     return out;
   }
   out.min_ratio = std::max(0.0, eig.eigenvalues()(0)) / largest;
@@ -132,6 +133,7 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
   const Matrix6d unconstrained = s.asDiagonal() * left * s.cwiseInverse().asDiagonal();
   out.covariance_registered = s.asDiagonal() * constrained.covariance * s.asDiagonal();
+  out.prediction_projector = unconstrained;
   out.covariance =
       out.covariance_registered + unconstrained * odometry_covariance * unconstrained.transpose();
   return out;

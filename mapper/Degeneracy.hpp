@@ -41,6 +41,10 @@ struct BlendedIncrement {
   Matrix6d covariance = Matrix6d::Zero();
   /// The registration's part of `covariance` alone (its constrained directions).
   Matrix6d covariance_registered = Matrix6d::Zero();
+  /// P_u: maps a covariance of the prediction onto the directions taken from it, so that
+  /// `covariance` = covariance_registered + P_u · odometry_covariance · P_uᵀ (zero when the
+  /// registration is kept whole).
+  Matrix6d prediction_projector = Matrix6d::Zero();
   /// What this frame tells of dead reckoning's bias (UpdateBias): the registration's
   /// correction of the prediction in the directions with at least `bias_min_information`, and
   /// the registration's information there (unscaled, [rad, m]); both zero elsewhere, and

@@ -1,9 +1,10 @@
-#include "core/Units.hpp"
 #include "mapper/FrameJudge.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <sstream>
+
+#include "core/Units.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -45,6 +46,13 @@ OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& o) {
   return {
       o.odometry_sigma_translation_ratio * length + o.odometry_sigma_translation_m,
       (o.odometry_sigma_rotation_deg_per_m * length + o.odometry_sigma_rotation_deg) * kDegToRad};
+}
+
+OdometrySigma OdometryNoiseSigma(double step_length_m, const MapperOptions& o) {
+  const double length = std::abs(step_length_m);
+  return {
+      o.odometry_noise_translation_ratio * length + o.odometry_noise_translation_m,
+      (o.odometry_noise_rotation_deg_per_m * length + o.odometry_noise_rotation_deg) * kDegToRad};
 }
 
 Judgement JudgeRegistration(const registration::RegistrationResult& result,

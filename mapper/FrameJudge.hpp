@@ -40,6 +40,9 @@ struct OdometrySigma {
   double rotation_rad = 0.0;
 };
 OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& options);
+/// What wheel odometry is typically wrong by over such a step (MapperOptions'
+/// `odometry_noise_*`): the covariance of what the chain takes from dead reckoning.
+OdometrySigma OdometryNoiseSigma(double step_length_m, const MapperOptions& options);
 /// The diagonal covariance [rx ry rz tx ty tz] (rad², m²) of those σ.
 Matrix6d CovarianceOf(const OdometrySigma& sigma);
 

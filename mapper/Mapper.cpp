@@ -1,10 +1,10 @@
-#include "core/Stopwatch.hpp"
 #include "mapper/Mapper.hpp"
 
 #include <chrono>
 #include <stdexcept>
 #include <utility>
 
+#include "core/Stopwatch.hpp"
 #include "mapper/Degeneracy.hpp"
 #include "mapper/OutlierFilter.hpp"
 #include "stereo/Stereo.hpp"
@@ -14,7 +14,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using core::MsSince;
-
 
 dem::ElevationMapOptions GridAlongProjection(dem::ElevationMapOptions options,
                                              const io::Georeference& georef) {
@@ -354,7 +353,14 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // it is (the simulator's cloud traverse, independent noise per point: z ~ 1).
   const double inflation =
       sensor_.type == io::SensorType::kStereo ? options_.mapper.stereo_covariance_scale : 1.0;
-  const Matrix6d honest = blended.covariance + (inflation - 1.0) * blended.covariance_registered;
+  // The directions kept from the prediction carry what dead reckoning is typically wrong by
+  // (odometry_noise_*), not the gates' bound on it (odometry_sigma_*): on the simulated cloud
+  // traverses, whose odometry errs as a rover's does, the bound put every frame within 2σ.
+  const Matrix6d& P_u = blended.prediction_projector;
+  const Matrix6d prediction =
+      CovarianceOf(OdometryNoiseSigma(T_ref_predicted.translation().norm(), options_.mapper));
+  const Matrix6d honest =
+      inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
   out.covariance_in_previous = A * honest * A.transpose();
   FloorAttitudeVariance(&out.covariance_in_previous,
                         options_.mapper.registration_attitude_sigma_deg);
@@ -393,7 +399,7 @@ ChainStep Mapper::Chain(const io::Frame& frame,
 }
 
 Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
-  return CovarianceOf(OdometryStepSigma(increment.translation().norm(), options_.mapper));
+  return CovarianceOf(OdometryNoiseSigma(increment.translation().norm(), options_.mapper));
 }
 
 void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,

@@ -190,6 +190,7 @@ class Mapper {
                                    const Eigen::Isometry3d& T_world_body_odom);
   ChainStep Chain(const io::Frame& frame, const std::optional<Eigen::Isometry3d>& T_world_body,
                   const Matrix6d& covariance_in_previous);
+  /// A fallback step's covariance: what dead reckoning is typically wrong by (odometry_noise_*).
   Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment) const;
   /// Dead reckoning's estimated bias per increment (see BlendIncrement): the last frame's.
   BiasEstimate OdometryBias() const {

@@ -49,6 +49,17 @@ struct MapperOptions {
   double odometry_sigma_translation_m = 0.02;      ///< [m] per step, floor
   double odometry_sigma_rotation_deg_per_m = 2.0;  ///< [deg/m] of the step length
   double odometry_sigma_rotation_deg = 0.5;        ///< [deg] per step, floor
+  /// What dead reckoning is typically wrong by over a step, where the `odometry_sigma_*` model
+  /// above bounds what it can be wrong by (a slip, a seed as bad as the 1° a frame):
+  /// the covariance of what the chain takes from it (the directions a partial frame keeps from
+  /// the prediction, a fallback frame's whole step), so that drift.csv's σ and the DEM's carry
+  /// a rover's odometry error rather than the gates' bound. A wheeled or skid-steer rover's
+  /// heading drifts by tenths of a degree per metre and its distance by a few percent; the
+  /// simulator's odometry errs by 0.23–0.36°/m and 3 % (rms per step). Same form as above.
+  double odometry_noise_translation_ratio = 0.03;  ///< [ratio] of the step length
+  double odometry_noise_translation_m = 0.002;     ///< [m] per step, floor
+  double odometry_noise_rotation_deg_per_m = 0.3;  ///< [deg/m] of the step length
+  double odometry_noise_rotation_deg = 0.02;       ///< [deg] per step, floor
 
   /// Dead reckoning's roll and pitch as an absolute measurement (IMU, inclinometers), σ [deg];
   /// 0 = roll and pitch from the chain alone (they drift: see AttitudePrior). Off by default:

@@ -86,6 +86,39 @@ TEST(Degeneracy, PlaneKeepsPredictionInXYYawAndRegistrationInZRollPitch) {
   EXPECT_LT(b.covariance(0, 0), 1e-6);
 }
 
+// The mapper chains the directions kept from dead reckoning with what it is typically wrong by
+// (mapper.odometry_noise_*), not with the gates' bound: the projector must carry any prediction
+// covariance onto exactly those directions, as `covariance` carries the bound.
+TEST(Degeneracy, PredictionProjectorCarriesAnyPredictionCovarianceOntoTheKeptDirections) {
+  const Eigen::Isometry3d predicted = Pose({0, 0, 0.02}, {0.5, 0.0, 0.0});
+  const Eigen::Isometry3d registered = Pose({0.01, -0.008, 0.05}, {0.6, 0.05, 0.03});
+  const Matrix6d bound = Diagonal(0.01, 0.02);
+  const BlendedIncrement b =
+      BlendIncrement(predicted, registered, PlaneInformation(5.0), 5.0, 1e-3, bound);
+  const Matrix6d& P = b.prediction_projector;
+  EXPECT_LT(
+      (b.covariance_registered + P * bound * P.transpose() - b.covariance).cwiseAbs().maxCoeff(),
+      1e-15);
+  // A noise ten times smaller in σ: yaw, x and y a hundred times smaller in variance, the
+  // registration's z, roll and pitch as they were.
+  const Matrix6d noise = Diagonal(0.001, 0.002);
+  const Matrix6d chained = b.covariance_registered + P * noise * P.transpose();
+  EXPECT_NEAR(chained(2, 2), 1e-6, 1e-10);
+  EXPECT_NEAR(chained(3, 3), 4e-6, 1e-10);
+  EXPECT_NEAR(chained(4, 4), 4e-6, 1e-10);
+  for (const int i : {0, 1, 5})
+    EXPECT_NEAR(chained(i, i), b.covariance(i, i), 1e-6 * b.covariance(i, i)) << i;
+  // Kept whole: nothing of the prediction; taken whole: all of it.
+  Matrix6d full = PlaneInformation(5.0);
+  full.topLeftCorner<3, 3>().diagonal() += Eigen::Vector3d::Constant(1e8);
+  full.bottomRightCorner<3, 3>().diagonal() += Eigen::Vector3d::Constant(1e8);
+  EXPECT_TRUE(BlendIncrement(predicted, registered, full, 5.0, 1e-3, bound)
+                  .prediction_projector.isZero(1e-12));
+  EXPECT_EQ(BlendIncrement(predicted, registered, Matrix6d::Zero(), 5.0, 1e-3, bound)
+                .prediction_projector,
+            Matrix6d::Identity());
+}
+
 TEST(Degeneracy, FullRankInformationKeepsTheRegistrationWhole) {
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 1.0);
