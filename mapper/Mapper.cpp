@@ -151,7 +151,8 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
 
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
   // estimate of dead reckoning's bias.
-  r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous);
+  r.step = Chain(frame, reg.T_world_body, reg.covariance_in_previous,
+                 reg.reason == FallbackReason::kImplausibleCorrection);
   r.odometry_bias = reg.T_world_body && !r.step.fallback ? reg.odometry_bias : OdometryBias();
 
   // 7. Fuse the points at the chained pose into the DEM and the OctoMap.
@@ -369,14 +370,15 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
 
 ChainStep Mapper::Chain(const io::Frame& frame,
                         const std::optional<Eigen::Isometry3d>& T_world_body,
-                        const Matrix6d& covariance_in_previous) {
+                        const Matrix6d& covariance_in_previous, bool odometry_in_doubt) {
   if (!chain_) {
     chain_ = std::make_unique<PoseChain>(frame.T_world_body_odom);
     return chain_->back();
   }
   if (!T_world_body) {
     const Eigen::Isometry3d odometry = chain_->PredictIncrement(frame.T_world_body_odom);
-    return chain_->Add(frame.T_world_body_odom, std::nullopt, OdometryCovariance(odometry));
+    return chain_->Add(frame.T_world_body_odom, std::nullopt,
+                       OdometryCovariance(odometry, odometry_in_doubt));
   }
   // Roll and pitch pulled towards dead reckoning's absolute ones (AttitudePrior).
   const Eigen::Isometry3d T_world_body_prior =
@@ -398,8 +400,11 @@ ChainStep Mapper::Chain(const io::Frame& frame,
   return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous, systematic);
 }
 
-Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment) const {
-  return CovarianceOf(OdometryNoiseSigma(increment.translation().norm(), options_.mapper));
+Matrix6d Mapper::OdometryCovariance(const Eigen::Isometry3d& increment, bool in_doubt) const {
+  // A correction refused as implausible may be dead reckoning's slip as well as a wrong match.
+  const double length = increment.translation().norm();
+  return CovarianceOf(in_doubt ? OdometryStepSigma(length, options_.mapper)
+                               : OdometryNoiseSigma(length, options_.mapper));
 }
 
 void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsigned char>& keep,

@@ -188,10 +188,13 @@ class Mapper {
   static void Report(const Registered& reg, FrameResult* result);
   Registered RegisterOntoReference(const registration::IndexedCloud& source,
                                    const Eigen::Isometry3d& T_world_body_odom);
+  /// `odometry_in_doubt`: the registration disagreed with dead reckoning beyond the gate, so a
+  /// fallback step carries the gates' bound (odometry_sigma_*) rather than the typical error.
   ChainStep Chain(const io::Frame& frame, const std::optional<Eigen::Isometry3d>& T_world_body,
-                  const Matrix6d& covariance_in_previous);
-  /// A fallback step's covariance: what dead reckoning is typically wrong by (odometry_noise_*).
-  Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment) const;
+                  const Matrix6d& covariance_in_previous, bool odometry_in_doubt = false);
+  /// A fallback step's covariance: what dead reckoning is typically wrong by (odometry_noise_*),
+  /// or, `in_doubt`, what it can be wrong by (odometry_sigma_*).
+  Matrix6d OdometryCovariance(const Eigen::Isometry3d& increment, bool in_doubt) const;
   /// Dead reckoning's estimated bias per increment (see BlendIncrement): the last frame's.
   BiasEstimate OdometryBias() const {
     return results_.empty() ? BiasEstimate{} : results_.back().odometry_bias;

@@ -12,6 +12,7 @@
 #include "config/Config.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "io/Sequence.hpp"
+#include "mapper/FrameJudge.hpp"
 #include "mapper/Mapper.hpp"
 #include "service/DriftReport.hpp"
 #include "sim/Simulator.hpp"
@@ -231,4 +232,35 @@ TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {
   EXPECT_LT(road.rmse_m, 0.12);
   EXPECT_LT(road.p95_m, 0.16);
   EXPECT_EQ(road.off_20cm, 0u);
+}
+
+// A fallback step's covariance: dead reckoning's typical error (mapper.odometry_noise_*) when the
+// registration was refused on its own terms, the gates' bound (mapper.odometry_sigma_*) when it
+// disagreed with dead reckoning beyond the gate, since then either of them may be wrong.
+TEST(Mapper, AFallbackCarriesTheBoundOnlyWhenTheCorrectionWasImplausible) {
+  const io::SequenceReader reader(fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud");
+  auto first_fallback = [&](const mapper::PipelineOptions& options) {
+    mapper::Mapper m(reader.info(), options);
+    m.ProcessFrame(reader.Read(0));
+    return m.ProcessFrame(reader.Read(1));
+  };
+  mapper::PipelineOptions gate = Defaults();
+  gate.mapper.correction_gate_sigma = 1e-6;  // every correction is implausible
+  mapper::PipelineOptions refused = Defaults();
+  refused.mapper.max_rms_m = 1e-9;  // every registration is refused
+  const mapper::FrameResult a = first_fallback(gate);
+  const mapper::FrameResult b = first_fallback(refused);
+  ASSERT_TRUE(a.step.fallback);
+  ASSERT_TRUE(b.step.fallback);
+  EXPECT_EQ(a.fallback_reason, mapper::FallbackReason::kImplausibleCorrection);
+  EXPECT_EQ(b.fallback_reason, mapper::FallbackReason::kHighRms);
+  // Frame 1's covariance is its step's: a rotation block R Σ Rᵀ of an isotropic Σ is Σ.
+  const double step = a.step.used_increment.translation().norm();
+  const double bound = mapper::OdometryStepSigma(step, gate.mapper).rotation_rad;
+  const double noise = mapper::OdometryNoiseSigma(step, refused.mapper).rotation_rad;
+  EXPECT_GT(bound, 5.0 * noise);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(a.step.covariance(i, i), bound * bound, 1e-9 * bound * bound) << i;
+    EXPECT_NEAR(b.step.covariance(i, i), noise * noise, 1e-9 * noise * noise) << i;
+  }
 }
