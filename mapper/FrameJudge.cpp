@@ -41,18 +41,27 @@ const char* ToString(FallbackReason reason) {
   return "unknown";
 }
 
-OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& o) {
+namespace {
+
+// Both odometry models: a fraction of the step plus a floor, for translation and rotation.
+OdometrySigma LinearInStep(double step_length_m, double ratio, double floor_m, double deg_per_m,
+                           double floor_deg) {
   const double length = std::abs(step_length_m);
-  return {
-      o.odometry_sigma_translation_ratio * length + o.odometry_sigma_translation_m,
-      (o.odometry_sigma_rotation_deg_per_m * length + o.odometry_sigma_rotation_deg) * kDegToRad};
+  return {ratio * length + floor_m, (deg_per_m * length + floor_deg) * kDegToRad};
+}
+
+}  // namespace
+
+OdometrySigma OdometryStepSigma(double step_length_m, const MapperOptions& o) {
+  return LinearInStep(step_length_m, o.odometry_sigma_translation_ratio,
+                      o.odometry_sigma_translation_m, o.odometry_sigma_rotation_deg_per_m,
+                      o.odometry_sigma_rotation_deg);
 }
 
 OdometrySigma OdometryNoiseSigma(double step_length_m, const MapperOptions& o) {
-  const double length = std::abs(step_length_m);
-  return {
-      o.odometry_noise_translation_ratio * length + o.odometry_noise_translation_m,
-      (o.odometry_noise_rotation_deg_per_m * length + o.odometry_noise_rotation_deg) * kDegToRad};
+  return LinearInStep(step_length_m, o.odometry_noise_translation_ratio,
+                      o.odometry_noise_translation_m, o.odometry_noise_rotation_deg_per_m,
+                      o.odometry_noise_rotation_deg);
 }
 
 Judgement JudgeRegistration(const registration::RegistrationResult& result,

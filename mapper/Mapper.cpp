@@ -358,8 +358,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // (odometry_noise_*), not the gates' bound on it (odometry_sigma_*): on the simulated cloud
   // traverses, whose odometry errs as a rover's does, the bound put every frame within 2σ.
   const Matrix6d& P_u = blended.prediction_projector;
-  const Matrix6d prediction =
-      CovarianceOf(OdometryNoiseSigma(T_ref_predicted.translation().norm(), options_.mapper));
+  const Matrix6d prediction = OdometryCovariance(T_ref_predicted, /*in_doubt=*/false);
   const Matrix6d honest =
       inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
   out.covariance_in_previous = A * honest * A.transpose();
