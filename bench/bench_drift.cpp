@@ -128,8 +128,11 @@ using PeerFactory = std::unique_ptr<bench::PeerMethod> (*)(const bench::Points&,
 Run RunPeer(const Sequence& seq, PeerFactory make, const bench::PeerParams& params) {
   io::SequenceReader reader(seq.dir);
   const config::Config defaults;
-  const mapper::SensorSetup sensor{reader.info().sensor_type, reader.info().camera,
-                                   reader.info().T_body_sensor, defaults.stereo};
+  mapper::SensorSetup sensor;
+  sensor.type = reader.info().sensor_type;
+  sensor.camera = reader.info().camera;
+  sensor.T_body_sensor = reader.info().T_body_sensor;
+  sensor.stereo = defaults.stereo;
   Run run;
   io::Frame frame;
   bench::Points previous;

@@ -331,6 +331,12 @@ std::vector<KeyEntry> BuildRegistry() {
              AtLeast(0), "roll and pitch uncertainty a registered increment adds (floor)");
   map.Double("stereo_covariance_scale", &P::stereo_covariance_scale, "ratio", AtLeast(1),
              "stereo frames' registration covariance x this (neighbouring pixels share errors)");
+  map.Bool("image_check", &P::image_check,
+           "stereo: fuse the increment the left images' tracked corners give (step 5b)");
+  map.Double("image_covariance_scale", &P::image_covariance_scale, "ratio", AtLeast(1),
+             "stereo: the image estimate's covariance x this");
+  map.Double("image_gate_scale", &P::image_gate_scale, "ratio", AtLeast(1),
+             "stereo: image estimate used if within chi2 of the registration's covariance x this");
   map.Double("stereo_systematic_ratio", &P::stereo_systematic_ratio, "ratio", AtLeast(0),
              "stereo: translation error per metre of a registered step that repeats (calibration)");
   map.Double("stereo_systematic_deg_per_m", &P::stereo_systematic_deg_per_m, "deg/m", AtLeast(0),

@@ -6,12 +6,9 @@
 #include <cmath>
 
 namespace rovermap::mapper {
-namespace {
 
-// δ with T_registered = (Exp(δr), δt) ∘ T_predicted: the parameterisation of the information.
-Vector6d LeftDifference(const Eigen::Isometry3d& T_registered,
-                        const Eigen::Isometry3d& T_predicted) {
-  const Eigen::Isometry3d D = T_registered * T_predicted.inverse();
+Vector6d LeftDifference(const Eigen::Isometry3d& T_a, const Eigen::Isometry3d& T_b) {
+  const Eigen::Isometry3d D = T_a * T_b.inverse();
   const Eigen::AngleAxisd aa(D.linear());
   Vector6d delta;
   delta << aa.angle() * aa.axis(), D.translation();
@@ -26,6 +23,8 @@ Eigen::Isometry3d ApplyLeft(const Vector6d& delta, const Eigen::Isometry3d& T) {
   D.translation() = delta.tail<3>();
   return D * T;
 }
+
+namespace {
 
 // The eigen-directions of `A` (the information, scaled) that hold what `B` says a direction
 // needs: vᵀAv >= vᵀBv (> 0 when `keep_all`). A's own eigenvectors, because a least-squares
@@ -133,6 +132,8 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
   // Σ = S V_c Λ_c⁻¹ V_cᵀ S  +  P_u Σ_odometry P_uᵀ, P_u = S (I − P_c) S⁻¹.
   const Matrix6d unconstrained = s.asDiagonal() * left * s.cwiseInverse().asDiagonal();
   out.covariance_registered = s.asDiagonal() * constrained.covariance * s.asDiagonal();
+  out.information_registered =
+      s.cwiseInverse().asDiagonal() * constrained.information * s.cwiseInverse().asDiagonal();
   out.prediction_projector = unconstrained;
   out.covariance =
       out.covariance_registered + unconstrained * odometry_covariance * unconstrained.transpose();

@@ -41,6 +41,9 @@ struct BlendedIncrement {
   Matrix6d covariance = Matrix6d::Zero();
   /// The registration's part of `covariance` alone (its constrained directions).
   Matrix6d covariance_registered = Matrix6d::Zero();
+  /// The registration's information in its constrained directions ([rad, m], target frame):
+  /// the pseudo-inverse of `covariance_registered`.
+  Matrix6d information_registered = Matrix6d::Zero();
   /// P_u: maps a covariance of the prediction onto the directions taken from it, so that
   /// `covariance` = covariance_registered + P_u · odometry_covariance · P_uᵀ (zero when the
   /// registration is kept whole).
@@ -73,5 +76,11 @@ BlendedIncrement BlendIncrement(const Eigen::Isometry3d& T_predicted,
                                 double bias_min_information = 1e-6,
                                 const Matrix6d& noise_information = Matrix6d::Zero(),
                                 double min_information_over_noise = 0.0);
+
+/// δ with T_a = (Exp(δr), δt) ∘ T_b: a left perturbation [rx ry rz (rad) tx ty tz (m)] in the
+/// frame T_a and T_b map into, the parameterisation of the registration's information.
+Vector6d LeftDifference(const Eigen::Isometry3d& T_a, const Eigen::Isometry3d& T_b);
+/// (Exp(δr), δt) ∘ T.
+Eigen::Isometry3d ApplyLeft(const Vector6d& delta, const Eigen::Isometry3d& T);
 
 }  // namespace rovermap::mapper

@@ -71,6 +71,8 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     const auto start = std::chrono::steady_clock::now();
     stereo::StereoPointsResult points =
         stereo::ComputePoints(frame.left, frame.right, camera, setup.T_body_sensor, setup.stereo);
+    if (setup.image_landmarks)
+      out.landmarks = stereo::DetectLandmarks(frame.left, frame.right, camera, setup.image);
     out.stereo_ms = core::MsSince(start);
     if (points.status != stereo::StereoStatus::kOk) {
       out.reason = AboutFile(frame, "stereo: " + points.message);

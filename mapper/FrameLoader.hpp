@@ -10,6 +10,7 @@
 #include "io/CameraModel.hpp"
 #include "io/Sequence.hpp"
 #include "registration/PointCloud.hpp"
+#include "stereo/ImageMotion.hpp"
 #include "stereo/StereoOptions.hpp"
 
 namespace rovermap::mapper {
@@ -20,6 +21,10 @@ struct SensorSetup {
   std::optional<io::CameraModel> camera;  ///< required for stereo
   Eigen::Isometry3d T_body_sensor = Eigen::Isometry3d::Identity();
   stereo::StereoOptions stereo;
+  /// Detect the left image's corners with their depth (LoadedFrame::landmarks) for the image
+  /// check, with these options.
+  bool image_landmarks = false;
+  stereo::ImageMotionOptions image;
 };
 
 /// One frame's points in the body frame.
@@ -29,6 +34,8 @@ struct LoadedFrame {
   registration::PointCloud cloud;     ///< body frame; covariances when the sensor gives them
   /// Stereo only: points between neighbouring pixels, for the DEM alone (stereo.fill_spacing_m).
   registration::PointCloud fill;
+  /// Stereo only: the left image's corners with their depth, for the image check (step 5b).
+  stereo::ImageLandmarks landmarks;
   std::size_t input_points = 0;       ///< cloud: points read; stereo: pixels examined [count]
   std::size_t dropped_nonfinite = 0;  ///< non-finite points or covariances [count]
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)

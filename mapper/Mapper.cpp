@@ -6,6 +6,7 @@
 
 #include "core/Stopwatch.hpp"
 #include "mapper/Degeneracy.hpp"
+#include "mapper/ImageCheck.hpp"
 #include "mapper/OutlierFilter.hpp"
 #include "stereo/Stereo.hpp"
 
@@ -31,8 +32,13 @@ io::Georeference MakeGeoreference(const io::SequenceInfo& sequence) {
 // The sensor as the pipeline uses it: stereo.num_disparities 0 resolved from the camera's
 // height and tilt above the ground.
 SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options,
-                          const dem::ElevationMapOptions& dem) {
-  SensorSetup sensor{sequence.sensor_type, sequence.camera, sequence.T_body_sensor, options};
+                          const dem::ElevationMapOptions& dem, bool image_check) {
+  SensorSetup sensor;
+  sensor.type = sequence.sensor_type;
+  sensor.camera = sequence.camera;
+  sensor.T_body_sensor = sequence.T_body_sensor;
+  sensor.stereo = options;
+  sensor.image_landmarks = image_check && sequence.sensor_type == io::SensorType::kStereo;
   if (sequence.camera) {
     const io::CameraModel& c = *sequence.camera;
     sensor.stereo = stereo::ResolveDisparities(options, {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0},
@@ -73,12 +79,13 @@ struct Mapper::Registered {
   std::optional<registration::RegistrationResult> matcher;
   double reference_distance_m = 0.0;  ///< the matcher's D (0: keep the last one)
   BiasEstimate odometry_bias;         ///< the bias estimate if this frame is chained
+  ImageCheckOutcome image_check = ImageCheckOutcome::kNone;
 };
 
 Mapper::Mapper(const io::SequenceInfo& sequence, const PipelineOptions& options)
     : sequence_(sequence),
       options_(options),
-      sensor_(ResolveSensor(sequence, options.stereo, options.dem)),
+      sensor_(ResolveSensor(sequence, options.stereo, options.dem, ImageCheckOn(options.mapper))),
       georef_(MakeGeoreference(sequence)),
       attitude_(options.mapper.odometry_attitude_sigma_deg,
                 options.mapper.registration_attitude_sigma_deg),
@@ -146,7 +153,8 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // (or, re-applying a journalled frame, what that gave).
   const auto register_start = Clock::now();
   const Registered reg =
-      recorded ? Recorded(*recorded) : RegisterOntoReference(*source, frame.T_world_body_odom);
+      recorded ? Recorded(*recorded)
+               : RegisterOntoReference(*source, frame.T_world_body_odom, &loaded.landmarks);
   r.time.register_ms = MsSince(register_start);
 
   // 6. Chain the accepted increment (or dead reckoning's); a registered one updates the
@@ -161,6 +169,7 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   // 8. Report; this frame becomes the next one's reference.
   Report(reg, &r);
   KeepAsReference(std::move(source), r.step, r.reference_distance_m);
+  previous_landmarks_ = std::move(prepared.loaded.landmarks);
   r.time.total_ms = loaded.stereo_ms + prepared.prepare_ms + MsSince(start);
   results_.push_back(r);
   return r;
@@ -188,6 +197,7 @@ void Mapper::Report(const Registered& reg, FrameResult* r) {
   r->fallback_reason = reg.reason;
   r->detail = reg.detail;
   r->odometry_directions = reg.odometry_directions;
+  r->image_check = reg.image_check;
   if (reg.T_world_body && r->step.fallback) {  // PoseChain refused it: not a finite rigid motion
     r->status = FrameStatus::kFallback;
     r->fallback_reason = FallbackReason::kRegistrationFailed;
@@ -262,11 +272,13 @@ Mapper::Registered Mapper::Recorded(const FrameResult& recorded) {
   out.odometry_directions = recorded.odometry_directions;
   out.reference_distance_m = recorded.reference_distance_m;
   out.odometry_bias = recorded.odometry_bias;
+  out.image_check = recorded.image_check;
   return out;
 }
 
 Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedCloud& source,
-                                                 const Eigen::Isometry3d& T_world_body_odom) {
+                                                 const Eigen::Isometry3d& T_world_body_odom,
+                                                 const stereo::ImageLandmarks* landmarks) {
   Registered out;
   out.odometry_bias = OdometryBias();
   if (!chain_) return out;  // frame 0: the chain starts at its dead-reckoning pose
@@ -318,7 +330,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   }
   // 5. Keep dead reckoning in the directions the data do not constrain, then judge the
   // correction that is left against what odometry can be wrong by.
-  const BlendedIncrement blended =
+  BlendedIncrement blended =
       BlendIncrement(T_ref_predicted, m.T_target_source, m.information, m.extent_m,
                      options_.mapper.min_information, odometry_covariance, OdometryBias().bias,
                      options_.mapper.bias_min_information, m.noise_information,
@@ -329,6 +341,38 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
         "no direction constrained (information below mapper.min_information or "
         "mapper.min_information_over_noise)";
     return out;
+  }
+  // The stereo error model treats every pixel's error as its own; neighbouring pixels share
+  // theirs (the matcher's block, the sub-pixel window). Cloud frames keep their information as
+  // it is (the simulator's cloud traverse, independent noise per point: z ~ 1).
+  const double inflation =
+      sensor_.type == io::SensorType::kStereo ? options_.mapper.stereo_covariance_scale : 1.0;
+  // The directions kept from the prediction carry what dead reckoning is typically wrong by
+  // (odometry_noise_*), not the gates' bound on it (odometry_sigma_*): on the simulated cloud
+  // traverses, whose odometry errs as a rover's does, the bound put every frame within 2σ.
+  const Matrix6d prediction = OdometryCovariance(T_ref_predicted, /*in_doubt=*/false);
+  const Matrix6d& P_u = blended.prediction_projector;
+  Matrix6d honest =
+      inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
+  // 5b. The image check: the increment the left images see, fused by information.
+  if (ImageCheckOn(options_.mapper) && landmarks && !landmarks->empty() &&
+      !previous_landmarks_.empty() && sensor_.camera) {
+    const io::CameraModel& c = *sensor_.camera;
+    const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
+    const std::optional<ImageIncrement> image = ToBodyIncrement(
+        stereo::EstimateImageMotion(previous_landmarks_, landmarks->left, camera,
+                                    sensor_.image),
+        sensor_.T_body_sensor, options_.mapper.image_covariance_scale);
+    out.image_check = ImageCheckOutcome::kFailed;
+    if (image) {
+      const ImageFusion fused = FuseImageIncrement(blended, inflation, prediction, *image,
+                                                   options_.mapper.image_gate_scale);
+      out.image_check = fused.outcome;
+      if (fused.outcome == ImageCheckOutcome::kUsed) {
+        blended.T = fused.T;
+        honest = fused.covariance;
+      }
+    }
   }
   const Judgement plausible = JudgeCorrection(T_ref_predicted, blended.T, options_.mapper);
   if (!plausible.accepted) {
@@ -349,18 +393,6 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   }
   // The blended covariance is a left perturbation in the reference frame; move it to frame k−1.
   const Matrix6d A = Adjoint(last.T_world_body.inverse() * T_world_ref);
-  // The stereo error model treats every pixel's error as its own; neighbouring pixels share
-  // theirs (the matcher's block, the sub-pixel window). Cloud frames keep their information as
-  // it is (the simulator's cloud traverse, independent noise per point: z ~ 1).
-  const double inflation =
-      sensor_.type == io::SensorType::kStereo ? options_.mapper.stereo_covariance_scale : 1.0;
-  // The directions kept from the prediction carry what dead reckoning is typically wrong by
-  // (odometry_noise_*), not the gates' bound on it (odometry_sigma_*): on the simulated cloud
-  // traverses, whose odometry errs as a rover's does, the bound put every frame within 2σ.
-  const Matrix6d& P_u = blended.prediction_projector;
-  const Matrix6d prediction = OdometryCovariance(T_ref_predicted, /*in_doubt=*/false);
-  const Matrix6d honest =
-      inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
   out.covariance_in_previous = A * honest * A.transpose();
   FloorAttitudeVariance(&out.covariance_in_previous,
                         options_.mapper.registration_attitude_sigma_deg);

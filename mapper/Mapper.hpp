@@ -21,6 +21,7 @@
 #include "mapper/Degeneracy.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/FrameLoader.hpp"
+#include "mapper/ImageCheck.hpp"
 #include "mapper/LocalMap.hpp"
 #include "mapper/MapperOptions.hpp"
 #include "mapper/OctoMapWorker.hpp"
@@ -72,6 +73,7 @@ struct FrameResult {
   ChainStep step;      ///< pose, dead reckoning, corrections, covariance
   std::optional<Eigen::Isometry3d> T_world_body_truth;  ///< when the frame carries it
   unsigned odometry_directions = 0;                     ///< Direction bits kept from dead reckoning
+  ImageCheckOutcome image_check = ImageCheckOutcome::kNone;  ///< step 5b
   /// The matcher's result (status "-" when it did not run).
   std::string matcher_status = "-";
   int iterations = 0;
@@ -117,7 +119,13 @@ class ReapplyError : public std::runtime_error {
 /// from the camera's height and tilt above the ground, and the stereo fill limited to the points
 /// the DEM would fuse (StereoOptions::fill_max_horizontal_sigma_m). Never throws.
 SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::StereoOptions& options,
-                          const dem::ElevationMapOptions& dem);
+                          const dem::ElevationMapOptions& dem, bool image_check = false);
+
+/// Whether `options` run the image check (step 5b): mapper.image_check with the previous frame
+/// as the reference (the local map has no single frame whose image the corners come from).
+inline bool ImageCheckOn(const MapperOptions& options) {
+  return options.image_check && options.reference == Reference::kPrevious;
+}
 
 /// One sequence's pipeline. Holds the previous frame's indexed cloud (or the local map), the
 /// pose chain and the two maps; no frame's points are kept beyond the next frame (beyond K
@@ -187,7 +195,8 @@ class Mapper {
   static FrameResult Begin(const io::Frame& frame, const PreparedFrame& prepared, double load_ms);
   static void Report(const Registered& reg, FrameResult* result);
   Registered RegisterOntoReference(const registration::IndexedCloud& source,
-                                   const Eigen::Isometry3d& T_world_body_odom);
+                                   const Eigen::Isometry3d& T_world_body_odom,
+                                   const stereo::ImageLandmarks* landmarks = nullptr);
   /// `odometry_in_doubt`: the registration disagreed with dead reckoning beyond the gate, so a
   /// fallback step carries the gates' bound (odometry_sigma_*) rather than the typical error.
   ChainStep Chain(const io::Frame& frame, const std::optional<Eigen::Isometry3d>& T_world_body,
@@ -216,6 +225,7 @@ class Mapper {
   // or the local map of the last K good frames.
   std::optional<std::size_t> reference_index_;
   std::unique_ptr<registration::IndexedCloud> previous_;
+  stereo::ImageLandmarks previous_landmarks_;  ///< the reference frame's, for the image check
   LocalMap local_map_;
   double last_reference_distance_m_ = 0.0;
   std::vector<FrameResult> results_;

@@ -78,6 +78,23 @@ struct MapperOptions {
   /// eight simulated traverses, pooled, within 2σ (docs/replay.md, "What happens to each
   /// frame"). Cloud frames keep theirs.
   double stereo_covariance_scale = 10.0;
+  /// Step 5b, the image check (stereo frames, reference `previous`): corners of the reference
+  /// frame's left image with their stereo depth are tracked into this frame's left image and
+  /// give the increment as the images see it (stereo::EstimateImageMotion). It is fused with
+  /// the registered increment by information: pixels hold the rotation at any range, where a
+  /// far stereo point's depth is uncertain by decimetres. On KITTI it takes the registration's
+  /// heading drift from +0.032° to +0.010° a frame (docs/replay.md, step 5b).
+  bool image_check = true;
+  /// The image estimate's covariance (the inverse of its reprojection information) × this
+  /// [ratio of variances], like stereo_covariance_scale for the points: 10 on both.
+  double image_covariance_scale = 10.0;
+  /// The image estimate is used only when it agrees with the registered one: squared
+  /// Mahalanobis distance of their difference within χ²₆ 99.9 % (22.46), the registration's
+  /// covariance × this [ratio of variances]. A single step's registration errs by 4–14 times
+  /// its (already scaled) variance (KITTI and the simulator, frame by frame); its chain, not
+  /// its step, is what stereo_covariance_scale calibrates.
+  double image_gate_scale = 8.0;
+
   /// The part of a registered stereo increment's error that repeats from step to step, per
   /// metre of the step: a rig's calibration (baseline, focal length, rectification) scales and
   /// turns every step alike [ratio of the step's length; deg per metre]. Cloud frames: none.

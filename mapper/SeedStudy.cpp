@@ -13,7 +13,7 @@ PreloadedSequence Preload(const std::filesystem::path& sequence_dir, const Pipel
   PreloadedSequence out;
   out.info = reader.info();
   out.truth = reader.groundtruth();
-  const SensorSetup sensor = ResolveSensor(out.info, options.stereo, options.dem);
+  const SensorSetup sensor = ResolveSensor(out.info, options.stereo, options.dem, ImageCheckOn(options.mapper));
   io::Frame frame;
   while ((max_frames == 0 || out.frames.size() < max_frames) && reader.Next(&frame)) {
     out.loaded.push_back(

@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '5'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '6'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
@@ -169,6 +169,7 @@ void VisitResult(Io& io, Result& f) {
   VisitStep(io, f.step);
   io.OptionalPose(f.T_world_body_truth);
   io.template Value<std::uint32_t>(f.odometry_directions);
+  io.Enum(f.image_check, ImageCheckOutcome::kFailed);
   io.Text(f.matcher_status);
   io.template Value<std::int32_t>(f.iterations);
   io.template Value<std::uint64_t>(f.inliers);
@@ -358,6 +359,7 @@ struct CheckpointAccess {
     m->reference_index_ = has_reference ? std::optional<std::size_t>(reference) : std::nullopt;
     m->last_reference_distance_m_ = r->Get<double>();
     m->previous_.reset();
+    m->previous_landmarks_ = {};
     if (r->Get<std::uint8_t>() != 0) {
       const auto index = r->Get<std::uint64_t>();
       LoadedFrame loaded = LoadFrame(read_frame(index), m->sensor_, m->options_.mapper.min_points);
@@ -368,6 +370,7 @@ struct CheckpointAccess {
       }
       m->previous_ = std::make_unique<registration::IndexedCloud>(std::move(loaded.cloud),
                                                                   m->options_.registration);
+      m->previous_landmarks_ = std::move(loaded.landmarks);
     }
     std::vector<registration::PointCloud> local(r->Count(r->left()));
     for (registration::PointCloud& c : local) c = GetCloud(r);

@@ -7,6 +7,7 @@
 #include <functional>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "core/Units.hpp"
@@ -86,7 +87,7 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
        "cum_dx_m,cum_dy_m,cum_dz_m,cum_droll_deg,cum_dpitch_deg,cum_dyaw_deg,"
        "status,fallback_reason,odometry_directions,iterations,inliers,inlier_ratio,rms_m,time_ms,"
        "matcher_status,conditioning,points,outliers_removed,detail,"
-       "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg\n";
+       "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,image_check\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
     s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
@@ -100,7 +101,7 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
       << Quoted(r.detail);
     const PoseSigmas sd = SigmasOf(r.step);
     s << ',' << sd.x_m << ',' << sd.y_m << ',' << sd.z_m << ',' << sd.roll_deg << ','
-      << sd.pitch_deg << ',' << sd.yaw_deg << '\n';
+      << sd.pitch_deg << ',' << sd.yaw_deg << ',' << ToString(r.image_check) << '\n';
   }
   return s.str();
 }
@@ -123,7 +124,9 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift) {
   const std::vector<FrameResult>& results = state.results;
   std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0, nonfinite = 0;
+  std::map<std::string, std::size_t> image_check;
   for (const FrameResult& r : results) {
+    if (r.image_check != mapper::ImageCheckOutcome::kNone) ++image_check[ToString(r.image_check)];
     if (r.status == FrameStatus::kRegistered || r.status == FrameStatus::kPartial) ++registered;
     if (r.status == FrameStatus::kPartial) ++partial;
     if (r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame) ++fallbacks;
@@ -152,6 +155,10 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
       {"distance_m", state.distance_m},
       {"final_correction", CorrectionJson(state.final_correction)},
       {"odometry_bias", OdometryBiasJson(results)},
+      {"image_check",
+       {{"used", image_check["used"]},
+        {"disagreed", image_check["disagreed"]},
+        {"failed", image_check["failed"]}}},
       {"timing", timing},
       {"frames_per_second",
        run.wall_ms > 0.0 ? 1000.0 * static_cast<double>(results.size()) / run.wall_ms : 0.0},

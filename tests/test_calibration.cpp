@@ -89,9 +89,12 @@ MonteCarlo SimulateChains(int steps, int runs, const Vector6d& white_sigma,
 
 using rovermap::testing::PipelineDefaultsWithoutOctoMap;
 
-mapper::CalibrationCheck Calibration(const mapper::PreloadedSequence& seq, const char* what) {
-  const auto check = mapper::CheckCalibration(
-      mapper::RunWithOdometry(seq, mapper::OdometryOf(seq), PipelineDefaultsWithoutOctoMap()));
+mapper::CalibrationCheck Calibration(const mapper::PreloadedSequence& seq, const char* what,
+                                     bool image_check = true) {
+  mapper::PipelineOptions options = PipelineDefaultsWithoutOctoMap();
+  options.mapper.image_check = image_check;
+  const auto check =
+      mapper::CheckCalibration(mapper::RunWithOdometry(seq, mapper::OdometryOf(seq), options));
   EXPECT_TRUE(check.has_value());
   if (!check) return {};
   std::printf("%s: %zu frames, within 2 sigma %.3f, NEES mean %.2f, median %.2f\n", what,
@@ -162,7 +165,8 @@ namespace {
 // Seeds 1…`seeds` of the simulator's 20-frame traverse with `sensor`, pooled: one traverse's
 // frames share their errors (each pose is the last one's plus a step), so one traverse's
 // fraction within 2σ is a noisy sample of the calibration.
-mapper::CalibrationCheck PooledSimulated(sim::SensorKind sensor, int seeds, const char* name) {
+mapper::CalibrationCheck PooledSimulated(sim::SensorKind sensor, int seeds, const char* name,
+                                         bool image_check = true) {
   mapper::CalibrationCheck pooled;
   double within = 0.0, nees = 0.0;
   for (int seed = 1; seed <= seeds; ++seed) {
@@ -175,7 +179,8 @@ mapper::CalibrationCheck PooledSimulated(sim::SensorKind sensor, int seeds, cons
     sim::Simulator(cfg.sim).WriteSequence(dir, {});
     const std::string what = std::string("sim ") + name + ", seed " + std::to_string(seed);
     const mapper::CalibrationCheck c =
-        Calibration(mapper::Preload(dir, PipelineDefaultsWithoutOctoMap()), what.c_str());
+        Calibration(mapper::Preload(dir, PipelineDefaultsWithoutOctoMap()), what.c_str(),
+                    image_check);
     pooled.frames += c.frames;
     within += c.within_2sigma * static_cast<double>(c.frames);
     nees += c.nees_mean * static_cast<double>(c.frames);
@@ -195,11 +200,15 @@ mapper::CalibrationCheck PooledSimulated(sim::SensorKind sensor, int seeds, cons
 // mapper.stereo_covariance_scale at 2, every one 1.00 at 50. Pooled over those eight traverses
 // of 20 frames: 0.954, NEES 4.2 with the default 10 (0.757 at 2, 1.000 at 50; docs/replay.md,
 // "Known limits"). Seeds 1–4 here (a traverse takes 8 s to render): 0.974, NEES 4.1 (0.71 at 2,
-// 1.00 at 50).
+// 1.00 at 50). That is the registration's own covariance, which every frame without an image
+// estimate chains: the image check is off here. With it on, the images hold the simulator's
+// clean renderings so well that its steps are far inside the chain's calibration terms, which
+// were fitted to KITTI's rig (1.000 within 2σ; ImageCheck.SimulatedStereoTraverse).
 TEST(PoseCalibration, SimulatedStereoTraverses) {
   // Under the sanitizers one traverse: the code path, not the statistics.
   const int seeds = rovermap::testing::kSanitizedBuild ? 1 : 4;
-  const mapper::CalibrationCheck c = PooledSimulated(sim::SensorKind::kStereo, seeds, "stereo");
+  const mapper::CalibrationCheck c =
+      PooledSimulated(sim::SensorKind::kStereo, seeds, "stereo", /*image_check=*/false);
   if (!rovermap::testing::kSanitizedBuild) ExpectCalibrated(c);
 }
 

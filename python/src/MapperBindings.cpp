@@ -214,6 +214,9 @@ void BindMapper(py::module_& m) {
           "odometry_directions",
           [](const FrameResult& r) { return DirectionList(r.odometry_directions); },
           "directions kept from dead reckoning, e.g. ['x', 'y', 'yaw']")
+      .def_property_readonly(
+          "image_check", [](const FrameResult& r) { return std::string(ToString(r.image_check)); },
+          "the image check's outcome: used, disagreed, failed or none (drift.csv's word)")
       .def_readonly("matcher_status", &FrameResult::matcher_status)
       .def_readonly("iterations", &FrameResult::iterations)
       .def_readonly("inliers", &FrameResult::inliers)
