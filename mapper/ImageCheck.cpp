@@ -30,10 +30,14 @@ Matrix6d PseudoInverse(const Matrix6d& covariance, double floor) {
 
 const char* ToString(ImageCheckOutcome outcome) {
   switch (outcome) {
-    case ImageCheckOutcome::kNone: return "none";
-    case ImageCheckOutcome::kUsed: return "used";
-    case ImageCheckOutcome::kDisagreed: return "disagreed";
-    case ImageCheckOutcome::kFailed: return "failed";
+    case ImageCheckOutcome::kNone:
+      return "none";
+    case ImageCheckOutcome::kUsed:
+      return "used";
+    case ImageCheckOutcome::kDisagreed:
+      return "disagreed";
+    case ImageCheckOutcome::kFailed:
+      return "failed";
   }
   return "none";
 }
@@ -67,16 +71,18 @@ ImageFusion FuseImageIncrement(const BlendedIncrement& blended, double registrat
   out.mahalanobis2 = difference.dot(gate.solve(difference));
   if (!(out.mahalanobis2 <= kImageGate)) return out;
   // The blend's information: the registration's in its constrained directions, the
-  // prediction's in the others (each part's pseudo-inverse).
-  // A direction of the prediction counts when it keeps at least a millionth of the prediction's
-  // largest variance (P_u is a projector: its directions keep all of it, the others none).
-  const double floor = 1e-6 * prediction_covariance.diagonal().cwiseAbs().minCoeff();
-  const Matrix6d blend_information =
-      blended.information_registered / registration_scale + PseudoInverse(kept, floor);
-  const Eigen::LLT<Matrix6d> total(blend_information +
-                                   image.covariance.inverse());
+  // prediction's in the others (each part's pseudo-inverse). A direction of the prediction
+  // counts when it keeps more than a millionth of the prediction's largest variance (P_u is a
+  // projector: its directions keep all of theirs, the others round-off); a prediction without
+  // variance (odometry_noise_* all 0) adds none.
+  Matrix6d blend_information = blended.information_registered / registration_scale;
+  const double largest = prediction_covariance.diagonal().cwiseAbs().maxCoeff();
+  if (blended.constrained < 6 && largest > 0.0)
+    blend_information += PseudoInverse(kept, 1e-6 * largest);
+  const Matrix6d image_information = image.covariance.inverse();
+  const Eigen::LLT<Matrix6d> total(blend_information + image_information);
   if (total.info() != Eigen::Success) return out;
-  const Vector6d delta = total.solve(image.covariance.inverse() * difference);
+  const Vector6d delta = total.solve(image_information * difference);
   if (!delta.allFinite()) return out;
   out.outcome = ImageCheckOutcome::kUsed;
   out.T = ApplyLeft(delta, blended.T);

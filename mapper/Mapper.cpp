@@ -352,16 +352,14 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // traverses, whose odometry errs as a rover's does, the bound put every frame within 2σ.
   const Matrix6d prediction = OdometryCovariance(T_ref_predicted, /*in_doubt=*/false);
   const Matrix6d& P_u = blended.prediction_projector;
-  Matrix6d honest =
-      inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
+  Matrix6d honest = inflation * blended.covariance_registered + P_u * prediction * P_u.transpose();
   // 5b. The image check: the increment the left images see, fused by information.
   if (ImageCheckOn(options_.mapper) && landmarks && !landmarks->empty() &&
       !previous_landmarks_.empty() && sensor_.camera) {
     const io::CameraModel& c = *sensor_.camera;
     const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
     const std::optional<ImageIncrement> image = ToBodyIncrement(
-        stereo::EstimateImageMotion(previous_landmarks_, landmarks->left, camera,
-                                    sensor_.image),
+        stereo::EstimateImageMotion(previous_landmarks_, landmarks->left, camera, sensor_.image),
         sensor_.T_body_sensor, options_.mapper.image_covariance_scale);
     out.image_check = ImageCheckOutcome::kFailed;
     if (image) {

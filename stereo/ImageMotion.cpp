@@ -58,14 +58,16 @@ Reprojection Reproject(const Eigen::Vector3d& X_p, const Eigen::Matrix3d& cov_p,
   const double iz = 1.0 / X_c.z();
   Eigen::Matrix<double, 2, 3> Jpi;
   Jpi << c.fx * iz, 0, -c.fx * X_c.x() * iz * iz, 0, c.fy * iz, -c.fy * X_c.y() * iz * iz;
-  r.residual << observed.x - (c.fx * X_c.x() * iz + c.cx), observed.y - (c.fy * X_c.y() * iz + c.cy);
+  r.residual << observed.x - (c.fx * X_c.x() * iz + c.cx),
+      observed.y - (c.fy * X_c.y() * iz + c.cy);
   // X_c(δ) = Rᵀ (Exp(−δ) X_p − t) ≈ X_c + Rᵀ ([X_p]× δr − δt).
   Eigen::Matrix<double, 3, 6> dX;
   dX.leftCols<3>() = Rt * Hat(X_p);
   dX.rightCols<3>() = -Rt;
   r.J = Jpi * dX;
   const Eigen::Matrix<double, 2, 3> JX = Jpi * Rt;
-  const Eigen::Matrix2d cov = pixel_variance * Eigen::Matrix2d::Identity() + JX * cov_p * JX.transpose();
+  const Eigen::Matrix2d cov =
+      pixel_variance * Eigen::Matrix2d::Identity() + JX * cov_p * JX.transpose();
   r.weight = cov.inverse();
   r.valid = r.weight.allFinite();
   return r;

@@ -16,16 +16,16 @@
 namespace rovermap::stereo {
 
 struct ImageMotionOptions {
-  int max_corners = 1500;              ///< corners detected per frame [count]
-  double corner_quality = 0.01;        ///< goodFeaturesToTrack quality level [ratio]
-  double corner_spacing_px = 8.0;      ///< least distance between corners [px]
-  int window_px = 21;                  ///< KLT window edge [px]
-  int pyramid_levels = 3;              ///< KLT pyramid levels [count]
-  double max_range_m = 40.0;           ///< corners farther than this are not used [m]
-  double ransac_threshold_px = 1.0;    ///< PnP RANSAC reprojection threshold [px]
-  int min_inliers = 30;                ///< fewer = no estimate [count]
-  double pixel_sigma_px = 0.3;         ///< a tracked corner's error per axis [px]
-  double disparity_sigma_px = 0.3;     ///< its stereo match's disparity error [px]
+  int max_corners = 1500;            ///< corners detected per frame [count]
+  double corner_quality = 0.01;      ///< goodFeaturesToTrack quality level [ratio]
+  double corner_spacing_px = 8.0;    ///< least distance between corners [px]
+  int window_px = 21;                ///< KLT window edge [px]
+  int pyramid_levels = 3;            ///< KLT pyramid levels [count]
+  double max_range_m = 40.0;         ///< corners farther than this are not used [m]
+  double ransac_threshold_px = 1.0;  ///< PnP RANSAC reprojection threshold [px]
+  int min_inliers = 30;              ///< fewer = no estimate [count]
+  double pixel_sigma_px = 0.3;       ///< a tracked corner's error per axis [px]
+  double disparity_sigma_px = 0.3;   ///< its stereo match's disparity error [px]
 };
 
 /// One frame's corners with their stereo depth (camera frame, OpenCV axes) and covariances,
@@ -41,8 +41,8 @@ struct ImageLandmarks {
 /// Corners of `left` matched into `right` by KLT along the row (rectified pair): a match must
 /// stay within a pixel of its row and have a positive disparity. Never throws; empty images
 /// give no landmarks.
-ImageLandmarks DetectLandmarks(const cv::Mat& left, const cv::Mat& right, const StereoCamera& camera,
-                               const ImageMotionOptions& options);
+ImageLandmarks DetectLandmarks(const cv::Mat& left, const cv::Mat& right,
+                               const StereoCamera& camera, const ImageMotionOptions& options);
 
 struct ImageMotion {
   bool ok = false;

@@ -35,9 +35,9 @@ stereo::StereoCamera CameraOf(const io::SequenceInfo& info) {
 
 // A simulated stereo traverse of `frames` frames (seed `seed`), written once per test binary.
 std::filesystem::path SimulatedStereo(int frames, int seed) {
-  const std::filesystem::path dir = rovermap::testing::ScratchDir() /
-                                    ("image_check_" + std::to_string(frames) + "_" +
-                                     std::to_string(seed));
+  const std::filesystem::path dir =
+      rovermap::testing::ScratchDir() /
+      ("image_check_" + std::to_string(frames) + "_" + std::to_string(seed));
   if (!std::filesystem::exists(dir / "sequence.yaml")) {
     config::Config cfg;
     cfg.sim.frames = frames;
@@ -99,7 +99,8 @@ TEST(ImageCheck, FusionIsTheInformationWeightedMean) {
   }
   // Mahalanobis distance under the gate: Σ offset² / (σ_reg² + σ_img²).
   double expected = 0.0;
-  for (int i = 0; i < 6; ++i) expected += offset(i) * offset(i) / (s_reg(i) * s_reg(i) + s_img(i) * s_img(i));
+  for (int i = 0; i < 6; ++i)
+    expected += offset(i) * offset(i) / (s_reg(i) * s_reg(i) + s_img(i) * s_img(i));
   EXPECT_NEAR(f.mahalanobis2, expected, 1e-3 * expected);
 }
 
@@ -165,7 +166,8 @@ TEST(ImageMotion, RecoversTheSimulatedSteps) {
   const stereo::ImageMotionOptions options;
   io::Frame frame;
   ASSERT_TRUE(reader.Next(&frame));
-  stereo::ImageLandmarks previous = stereo::DetectLandmarks(frame.left, frame.right, camera, options);
+  stereo::ImageLandmarks previous =
+      stereo::DetectLandmarks(frame.left, frame.right, camera, options);
   Eigen::Isometry3d T_world_previous = *frame.T_world_body_truth;
   EXPECT_GT(previous.pixels.size(), 300u);
   int steps = 0;
@@ -174,7 +176,8 @@ TEST(ImageMotion, RecoversTheSimulatedSteps) {
         stereo::EstimateImageMotion(previous, frame.left, camera, options);
     ASSERT_TRUE(motion.ok) << motion.message;
     EXPECT_GT(motion.inliers, 200);
-    const auto increment = mapper::ToBodyIncrement(motion, T_bc, mapper::MapperOptions().image_covariance_scale);
+    const auto increment =
+        mapper::ToBodyIncrement(motion, T_bc, mapper::MapperOptions().image_covariance_scale);
     ASSERT_TRUE(increment.has_value());
     const Eigen::Isometry3d truth = T_world_previous.inverse() * *frame.T_world_body_truth;
     const Vector6d error = mapper::LeftDifference(increment->T_target_source, truth);
@@ -218,7 +221,8 @@ TEST(ImageMotion, ImagesWithoutCornersGiveNoEstimate) {
   EXPECT_FALSE(resized.ok);
 }
 
-// ---- what it buys --------------------------------------------------------------------------------
+// ---- what it buys
+// --------------------------------------------------------------------------------
 
 namespace {
 
@@ -229,8 +233,8 @@ struct ReplayRun {
   std::optional<mapper::CalibrationCheck> calibration;
 };
 
-ReplayRun Replay(const mapper::PreloadedSequence& seq, const std::vector<Eigen::Isometry3d>& odometry,
-           bool image_check) {
+ReplayRun Replay(const mapper::PreloadedSequence& seq,
+                 const std::vector<Eigen::Isometry3d>& odometry, bool image_check) {
   mapper::PipelineOptions options = rovermap::testing::PipelineDefaultsWithoutOctoMap();
   options.mapper.image_check = image_check;
   const std::vector<mapper::FrameResult> results = mapper::RunWithOdometry(seq, odometry, options);
@@ -243,11 +247,11 @@ ReplayRun Replay(const mapper::PreloadedSequence& seq, const std::vector<Eigen::
   for (const mapper::FrameResult& r : results)
     run.used += r.image_check == mapper::ImageCheckOutcome::kUsed ? 1 : 0;
   run.calibration = mapper::CheckCalibration(results);
-  std::printf("image check %s: heading error %+.4f deg/frame (RMS %.4f), final %+.3f deg, ATE "
-              "%.4f m, used on %d frames, within 2 sigma %.3f\n",
-              image_check ? "on " : "off", run.heading.mean_deg, run.heading.rms_deg,
-              run.heading.final_deg, run.ate_origin_m, run.used,
-              run.calibration ? run.calibration->within_2sigma : -1.0);
+  std::printf(
+      "image check %s: heading error %+.4f deg/frame (RMS %.4f), final %+.3f deg, ATE "
+      "%.4f m, used on %d frames, within 2 sigma %.3f\n",
+      image_check ? "on " : "off", run.heading.mean_deg, run.heading.rms_deg, run.heading.final_deg,
+      run.ate_origin_m, run.used, run.calibration ? run.calibration->within_2sigma : -1.0);
   return run;
 }
 
@@ -259,9 +263,9 @@ ReplayRun Replay(const mapper::PreloadedSequence& seq, const std::vector<Eigen::
 // σ stays calibrated.
 TEST(ImageCheck, KittiHeadingDriftsNoMoreThanTheVisualOdometryPeer) {
   if (rovermap::testing::kSanitizedBuild) GTEST_SKIP() << "statistics: the Release suite";
-  const mapper::PreloadedSequence seq = mapper::Preload(
-      std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
-      rovermap::testing::PipelineDefaultsWithoutOctoMap());
+  const mapper::PreloadedSequence seq =
+      mapper::Preload(std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51",
+                      rovermap::testing::PipelineDefaultsWithoutOctoMap());
   const std::vector<Eigen::Isometry3d> truth = io::PosesOf(seq.truth);
   const ReplayRun off = Replay(seq, truth, false);
   const ReplayRun on = Replay(seq, truth, true);
