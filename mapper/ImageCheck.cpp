@@ -62,6 +62,7 @@ ImageFusion FuseImageIncrement(const BlendedIncrement& blended, double registrat
                                double gate_scale) {
   ImageFusion out;
   out.T = blended.T;
+  out.odometry_directions = blended.odometry_directions;
   const Matrix6d& P_u = blended.prediction_projector;
   const Matrix6d kept = P_u * prediction_covariance * P_u.transpose();
   out.covariance = registration_scale * blended.covariance_registered + kept;
@@ -87,6 +88,8 @@ ImageFusion FuseImageIncrement(const BlendedIncrement& blended, double registrat
   out.outcome = ImageCheckOutcome::kUsed;
   out.T = ApplyLeft(delta, blended.T);
   out.covariance = total.solve(Matrix6d::Identity());
+  for (int i = 0; i < 6; ++i)
+    if (out.covariance(i, i) < 0.5 * kept(i, i)) out.odometry_directions &= ~(1u << i);
   return out;
 }
 

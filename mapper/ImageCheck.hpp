@@ -42,10 +42,13 @@ std::optional<ImageIncrement> ToBodyIncrement(const stereo::ImageMotion& motion,
 /// covariance is (I_b + I_i)⁻¹. Only when the two agree: the squared Mahalanobis distance of
 /// their difference under gate_scale × the blend's covariance + the image's is within χ²₆
 /// 99.9 % (22.46); otherwise `outcome` is kDisagreed and T, covariance are the blend's.
+/// `odometry_directions`: the blend's, less those where the fused variance is below half of
+/// what dead reckoning's prediction had there (the images hold them now).
 struct ImageFusion {
   ImageCheckOutcome outcome = ImageCheckOutcome::kDisagreed;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   Matrix6d covariance = Matrix6d::Zero();
+  unsigned odometry_directions = 0;
   double mahalanobis2 = 0.0;  ///< of the difference, under the gate's covariance
 };
 ImageFusion FuseImageIncrement(const BlendedIncrement& blended, double registration_scale,

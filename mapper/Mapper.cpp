@@ -368,6 +368,7 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
       out.image_check = fused.outcome;
       if (fused.outcome == ImageCheckOutcome::kUsed) {
         blended.T = fused.T;
+        blended.odometry_directions = fused.odometry_directions;
         honest = fused.covariance;
       }
     }

@@ -142,11 +142,19 @@ TEST(ImageCheck, ThePredictionsDirectionsAreWeighedToo) {
   blend.prediction_projector = Matrix6d::Zero();
   for (int i : {2, 3, 4}) blend.prediction_projector(i, i) = 1.0;  // yaw, x, y
   blend.constrained = 3;
+  blend.odometry_directions = mapper::kYaw | mapper::kX | mapper::kY;
   const Matrix6d prediction = Sigmas(0.2, 0.02).cwiseAbs2().asDiagonal();
   mapper::ImageIncrement image;
   image.covariance = Sigmas(0.05, 0.01).cwiseAbs2().asDiagonal();
   const mapper::ImageFusion f = mapper::FuseImageIncrement(blend, 1.0, prediction, image, 1.0);
   ASSERT_EQ(f.outcome, mapper::ImageCheckOutcome::kUsed);
+  // The images hold yaw, x and y now: none is dead reckoning's any more.
+  EXPECT_EQ(f.odometry_directions, 0u);
+  // An image estimate no better than the prediction leaves them dead reckoning's.
+  mapper::ImageIncrement vague;
+  vague.covariance = Sigmas(0.4, 0.04).cwiseAbs2().asDiagonal();
+  EXPECT_EQ(mapper::FuseImageIncrement(blend, 1.0, prediction, vague, 1.0).odometry_directions,
+            blend.odometry_directions);
   EXPECT_NEAR(f.covariance(2, 2),
               1.0 / (1.0 / std::pow(0.2 * kDeg, 2) + 1.0 / std::pow(0.05 * kDeg, 2)), 1e-15);
   EXPECT_NEAR(f.covariance(3, 3), 1.0 / (1.0 / 4e-4 + 1.0 / 1e-4), 1e-12);
