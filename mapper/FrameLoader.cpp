@@ -13,7 +13,7 @@ namespace {
 // camera (docs/design.md §4: it "feeds the stereo error model of the points"). Sensor frame.
 void AddStereoCovariances(registration::PointCloud* cloud, const io::CameraModel& c,
                           const stereo::StereoOptions& options) {
-  const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
+  const stereo::StereoCamera camera = StereoCameraOf(c);
   cloud->covariances.resize(cloud->size());
   for (std::size_t i = 0; i < cloud->size(); ++i) {
     cloud->covariances[i] = stereo::PointCovariance(
@@ -67,17 +67,18 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
       return out;
     }
     const io::CameraModel& c = *setup.camera;
-    const stereo::StereoCamera camera{c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
+    const stereo::StereoCamera camera = StereoCameraOf(c);
     const auto start = std::chrono::steady_clock::now();
     stereo::StereoPointsResult points =
         stereo::ComputePoints(frame.left, frame.right, camera, setup.T_body_sensor, setup.stereo);
-    if (setup.image_landmarks)
-      out.landmarks = stereo::DetectLandmarks(frame.left, frame.right, camera, setup.image);
-    out.stereo_ms = core::MsSince(start);
     if (points.status != stereo::StereoStatus::kOk) {
+      out.stereo_ms = core::MsSince(start);
       out.reason = AboutFile(frame, "stereo: " + points.message);
       return out;
     }
+    if (setup.image_landmarks)
+      out.landmarks = stereo::DetectLandmarks(frame.left, frame.right, camera, setup.image);
+    out.stereo_ms = core::MsSince(start);
     out.input_points = points.pixels;
     out.cloud = std::move(points.cloud);
     out.fill = std::move(points.fill);

@@ -11,6 +11,7 @@
 #include "io/Sequence.hpp"
 #include "registration/PointCloud.hpp"
 #include "stereo/ImageMotion.hpp"
+#include "stereo/Stereo.hpp"
 #include "stereo/StereoOptions.hpp"
 
 namespace rovermap::mapper {
@@ -40,6 +41,11 @@ struct LoadedFrame {
   std::size_t dropped_nonfinite = 0;  ///< non-finite points or covariances [count]
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)
 };
+
+/// The stereo module's camera from a sequence's camera model (rectified: no disparity offset).
+inline stereo::StereoCamera StereoCameraOf(const io::CameraModel& c) {
+  return {c.fx, c.fy, c.cx, c.cy, c.baseline_m, 0.0};
+}
 
 /// Keeps the points (with their normals and covariances) that are all finite, in order; clears
 /// chain_ids (frames are surfaces). Returns how many were dropped.
