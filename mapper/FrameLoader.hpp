@@ -31,8 +31,8 @@ struct SensorSetup {
 /// One frame's points in the body frame.
 struct LoadedFrame {
   bool ok = false;
-  std::string reason;                 ///< why not ok ("stereo: ...", "no finite points", ...)
-  registration::PointCloud cloud;     ///< body frame; covariances when the sensor gives them
+  std::string reason;              ///< why not ok ("stereo: ...", "no finite points", ...)
+  registration::PointCloud cloud;  ///< body frame; covariances when the sensor gives them
   /// Stereo only: points between neighbouring pixels, for the DEM alone (stereo.fill_spacing_m).
   registration::PointCloud fill;
   /// Stereo only: the left image's corners with their depth, for the image check (step 5b).

@@ -41,8 +41,8 @@ SensorSetup ResolveSensor(const io::SequenceInfo& sequence, const stereo::Stereo
   sensor.image_landmarks = image_check && sequence.sensor_type == io::SensorType::kStereo;
   if (sequence.camera) {
     const io::CameraModel& c = *sequence.camera;
-    sensor.stereo = stereo::ResolveDisparities(options, StereoCameraOf(c),
-                                               c.width, c.height, sequence.T_body_sensor);
+    sensor.stereo = stereo::ResolveDisparities(options, StereoCameraOf(c), c.width, c.height,
+                                               sequence.T_body_sensor);
   }
   // The DEM tests the world frame's horizontal σ, this the body frame's: a margin for the tilt.
   constexpr double kFillSigmaMargin = 1.25;
@@ -356,10 +356,10 @@ Mapper::Registered Mapper::RegisterOntoReference(const registration::IndexedClou
   // 5b. The image check: the increment the left images see, fused by information.
   if (ImageCheckOn(options_.mapper) && landmarks && !landmarks->empty() &&
       !previous_landmarks_.empty() && sensor_.camera) {
-    const std::optional<ImageIncrement> image = ToBodyIncrement(
-        stereo::EstimateImageMotion(previous_landmarks_, landmarks->left,
-                                    StereoCameraOf(*sensor_.camera), sensor_.image),
-        sensor_.T_body_sensor, options_.mapper.image_covariance_scale);
+    const std::optional<ImageIncrement> image =
+        ToBodyIncrement(stereo::EstimateImageMotion(previous_landmarks_, landmarks->left,
+                                                    StereoCameraOf(*sensor_.camera), sensor_.image),
+                        sensor_.T_body_sensor, options_.mapper.image_covariance_scale);
     out.image_check = ImageCheckOutcome::kFailed;
     if (image) {
       const ImageFusion fused = FuseImageIncrement(blended, inflation, prediction, *image,
