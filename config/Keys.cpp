@@ -299,6 +299,8 @@ std::vector<KeyEntry> BuildRegistry() {
              "isolated point: few neighbours within factor * range * angular spacing; 0 = off");
   map.Int("outlier_min_neighbors", &P::outlier_min_neighbors, "count", Bounds{0, false, 16, false},
           "neighbours an unisolated point has within that radius");
+  map.Double("registration_cell_px", &P::registration_cell_px, "px", AtLeast(0),
+             "stereo: register range-aware voxels this many pixels wide; 0 = every point");
   map.Bool("use_point_covariances", &P::use_point_covariances,
            "register with the points' covariances when both frames carry them");
   map.Double("seed_gate_scale", &P::seed_gate_scale, "ratio", AtLeast(0),

@@ -300,14 +300,72 @@ bool ElevationMap::FusePoint(const Eigen::Vector3d& point_world, double height_v
 FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
                                     const std::vector<Eigen::Matrix3d>& covariances,
                                     const FrameContext& ctx) {
-  FusionStats stats;
   const std::size_t n = points_world.size();
-  stats.points = n;
   const bool use_cov = !covariances.empty() && covariances.size() == n;
   if (!covariances.empty() && !use_cov) ++covariances_ignored_;
   const bool has_normals = ctx.normals != nullptr && !ctx.normals->empty();
   if (has_normals && ctx.normals->size() != n) ++covariances_ignored_;
   const bool use_normals = has_normals && ctx.normals->size() == n && options_.slope_aware_variance;
+  return FuseFrameWith(
+      n,
+      [&](std::size_t k, Eigen::Vector3d* p, const Eigen::Matrix3d** cov,
+          const Eigen::Vector3d** normal, bool* is_fill) {
+        *p = points_world[k];
+        *cov = use_cov ? &covariances[k] : nullptr;
+        *normal = use_normals ? &(*ctx.normals)[k] : nullptr;
+        *is_fill = k >= ctx.fill_from;
+        return true;
+      },
+      use_cov, ctx);
+}
+
+FusionStats ElevationMap::FuseFrame(const Eigen::Isometry3d& T_world_points,
+                                    const FramePart& measured, const FramePart& fill,
+                                    const FrameContext& ctx) {
+  struct Part {
+    const FramePart* part;
+    std::size_t n;
+    bool cov, normals, masked;
+  };
+  auto size = [](const auto* v) { return v == nullptr ? std::size_t{0} : v->size(); };
+  Part parts[2];
+  bool use_cov = true, use_normals = options_.slope_aware_variance;
+  for (int i = 0; i < 2; ++i) {
+    const FramePart& f = i == 0 ? measured : fill;
+    Part& q = parts[i];
+    q.part = &f;
+    q.n = size(f.points);
+    q.cov = size(f.covariances) == q.n;
+    q.normals = size(f.normals) == q.n;
+    q.masked = size(f.keep) == q.n && f.keep != nullptr;
+    if (q.n == 0) continue;
+    if (size(f.covariances) != 0 && !q.cov) ++covariances_ignored_;
+    if (size(f.normals) != 0 && !q.normals) ++covariances_ignored_;
+    use_cov = use_cov && q.cov && size(f.covariances) != 0;
+    use_normals = use_normals && q.normals && size(f.normals) != 0;
+  }
+  FrameContext context = ctx;
+  context.fill_from = parts[0].n;
+  return FuseFrameWith(
+      parts[0].n + parts[1].n,
+      [&](std::size_t k, Eigen::Vector3d* p, const Eigen::Matrix3d** cov,
+          const Eigen::Vector3d** normal, bool* is_fill) {
+        *is_fill = k >= parts[0].n;
+        const Part& q = parts[*is_fill ? 1 : 0];
+        const std::size_t i = *is_fill ? k - parts[0].n : k;
+        if (q.masked && (*q.part->keep)[i] == 0) return false;
+        *p = T_world_points * (*q.part->points)[i];
+        *cov = use_cov ? &(*q.part->covariances)[i] : nullptr;
+        *normal = use_normals ? &(*q.part->normals)[i] : nullptr;
+        return true;
+      },
+      use_cov, context);
+}
+
+template <typename At>
+FusionStats ElevationMap::FuseFrameWith(std::size_t n, const At& at, bool use_cov,
+                                        const FrameContext& ctx) {
+  FusionStats stats;
 
   // Pose term J Σ Jᵀ with J = (dy, −dx, 0, 0, 0, 1): only rows/cols rx, ry, tz of Σ matter.
   Eigen::Matrix3d pose_block = Eigen::Matrix3d::Zero();
@@ -325,7 +383,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   // Pass 1: each point's cell and height variance, or why it is dropped. The cells go in their
   // own array, which CountPerCell takes as it is.
   struct Fusable {
-    std::size_t k;
+    double z;
     double r;
     double shared;  // the attitude's share of r (attitude_error_shared), else 0
   };
@@ -333,11 +391,16 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   std::vector<CellIndex> cells;
   fusable.reserve(n);
   cells.reserve(n);
-  std::optional<CellSet> measured;  // the cells of the points before ctx.fill_from
+  std::optional<CellSet> measured;  // the cells of the points before the fill
   std::size_t fill_skipped = 0;
+  Eigen::Vector3d p;
+  const Eigen::Matrix3d* cov = nullptr;
+  const Eigen::Vector3d* normal = nullptr;
+  bool is_fill = false;
   for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3d& p = points_world[k];
-    if (k >= ctx.fill_from) {
+    if (!at(k, &p, &cov, &normal, &is_fill)) continue;
+    ++stats.points;
+    if (is_fill) {
       if (!measured) measured.emplace(cells);
       const auto cell = WorldToCell(p.x(), p.y());
       if (!cell || measured->Contains(*cell)) {
@@ -346,7 +409,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       }
     }
     if (limit_h) {
-      if (LargestHorizontalVariance(horizontal, covariances[k]) > max_h * max_h) {
+      if (LargestHorizontalVariance(horizontal, *cov) > max_h * max_h) {
         ++stats.dropped_imprecise;
         continue;
       }
@@ -360,9 +423,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       ++stats.dropped_out_of_grid;
       continue;
     }
-    const Eigen::Matrix3d* cov = use_cov ? &covariances[k] : nullptr;
-    double r =
-        HeightVariance(p, cov, use_normals ? &(*ctx.normals)[k] : nullptr, ctx.R_world_cov, *cell);
+    double r = HeightVariance(p, cov, normal, ctx.R_world_cov, *cell);
     double shared = 0.0;
     if (use_pose) {
       const Eigen::Vector3d j(p.y() - c.y(), -(p.x() - c.x()), 1.0);
@@ -376,7 +437,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
       ++stats.dropped_nonfinite;
       continue;
     }
-    fusable.push_back({k, std::max(r, options_.min_point_variance_m2), shared});
+    fusable.push_back({p.z(), std::max(r, options_.min_point_variance_m2), shared});
     cells.push_back(*cell);
   }
 
@@ -386,7 +447,7 @@ FusionStats ElevationMap::FuseFrame(const std::vector<Eigen::Vector3d>& points_w
   for (std::size_t i = 0; i < fusable.size(); ++i) {
     const Fusable& f = fusable[i];
     const double m = counts.empty() ? 1.0 : static_cast<double>(counts[i]);
-    FuseAt(cells[i], points_world[f.k].z(), f.r, f.r * m, ctx.frame, &stats, f.shared);
+    FuseAt(cells[i], f.z, f.r, f.r * m, ctx.frame, &stats, f.shared);
   }
   stats.points -= fill_skipped;
   return stats;

@@ -34,6 +34,7 @@
 // Non-finite points, variances or positions outside the grid are dropped and counted.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -197,6 +198,17 @@ struct FrameContext {
   std::size_t fill_from = std::numeric_limits<std::size_t>::max();
 };
 
+/// Part of a frame's points as the frame holds them (FuseFrame's no-copy form): in the frame
+/// FuseFrame's pose moves into the world, with their covariances and normals in the frame
+/// ctx.R_world_cov rotates (either may be null or empty), and a mask (null = all; 0 = not fused
+/// and not counted).
+struct FramePart {
+  const std::vector<Eigen::Vector3d>* points = nullptr;
+  const std::vector<Eigen::Matrix3d>* covariances = nullptr;
+  const std::vector<Eigen::Vector3d>* normals = nullptr;
+  const std::vector<unsigned char>* keep = nullptr;
+};
+
 /// For each of `cells`, how many of `cells` are the same cell (a frame's points per cell).
 std::vector<std::uint32_t> CountPerCell(const std::vector<CellIndex>& cells);
 
@@ -217,6 +229,12 @@ class ElevationMap {
   /// or normals ignored, see `covariances_ignored`).
   FusionStats FuseFrame(const std::vector<Eigen::Vector3d>& points_world,
                         const std::vector<Eigen::Matrix3d>& covariances, const FrameContext& ctx);
+  /// The same for a frame's measured points and its fill (ctx.fill_from and ctx.normals are
+  /// ignored: the parts say), each moved into the world by `T_world_points` as it is read, so
+  /// that nothing of the frame is copied (a KITTI frame's 700 000 points and covariances were,
+  /// every frame). Gives the same as FuseFrame on the kept points moved and concatenated.
+  FusionStats FuseFrame(const Eigen::Isometry3d& T_world_points, const FramePart& measured,
+                        const FramePart& fill, const FrameContext& ctx);
 
   /// Fuses one point with a height variance [m^2] (the rule above). Returns true if the point is
   /// now part of the primary (fused into it, or its candidate took over); false if it went into
@@ -317,6 +335,10 @@ class ElevationMap {
   bool FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
               FusionStats* stats, double shared_m2 = 0.0);
   bool WithinGate(double h, double p, double z, double r) const;
+  // FuseFrame's work: `count` points, the k-th from `at(k, &p_world, &cov, &normal, &fill)`
+  // (false: masked out, not counted).
+  template <typename At>
+  FusionStats FuseFrameWith(std::size_t count, const At& at, bool use_cov, const FrameContext& ctx);
   // A point's height variance before the pose term (FuseFrame; normal may be null).
   double HeightVariance(const Eigen::Vector3d& p, const Eigen::Matrix3d* covariance,
                         const Eigen::Vector3d* normal, const Eigen::Matrix3d& R_world_cov,

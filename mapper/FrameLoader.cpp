@@ -82,6 +82,7 @@ LoadedFrame LoadFrame(const io::Frame& frame, const SensorSetup& setup, std::siz
     out.input_points = points.pixels;
     out.cloud = std::move(points.cloud);
     out.fill = std::move(points.fill);
+    out.spacing_m = points.spacing_m;
     DropNonFinite(&out.fill);
   } else {
     out.input_points = frame.cloud.size();

@@ -40,6 +40,9 @@ struct LoadedFrame {
   std::size_t input_points = 0;       ///< cloud: points read; stereo: pixels examined [count]
   std::size_t dropped_nonfinite = 0;  ///< non-finite points or covariances [count]
   double stereo_ms = 0.0;             ///< disparity + triangulation (stereo only)
+  /// Stereo only: the points' median spacing from their pixel neighbours
+  /// (StereoPointsResult::spacing_m) [m]; 0 = unknown.
+  double spacing_m = 0.0;
 };
 
 /// The stereo module's camera from a sequence's camera model (rectified: no disparity offset).

@@ -102,9 +102,15 @@ struct FrameResult {
 /// Step 1's outcome: a frame's points loaded, indexed (tree built) and their isolated points
 /// flagged. It depends on the frame alone, so it can be made while an earlier frame is processed.
 struct PreparedFrame {
-  LoadedFrame loaded;  ///< ok, reason and counts; its cloud is moved into `source` when ok
+  /// ok, reason and counts. Its cloud is moved into `source` when ok, unless the matcher
+  /// registers merged points (MapperOptions::registration_cell_px): then it stays, for the DEM.
+  LoadedFrame loaded;
   std::unique_ptr<registration::IndexedCloud> source;  ///< null when !loaded.ok
-  OutlierMask isolated;
+  OutlierMask isolated;  ///< over the points fused (Fused())
+  /// The points the DEM and the OctoMap take: the loaded cloud, or `source`'s when it was moved.
+  const registration::PointCloud& Fused() const {
+    return loaded.cloud.empty() && source ? source->cloud() : loaded.cloud;
+  }
   double prepare_ms = 0.0;  ///< indexing and the outlier search
 };
 
@@ -229,11 +235,6 @@ class Mapper {
   LocalMap local_map_;
   double last_reference_distance_m_ = 0.0;
   std::vector<FrameResult> results_;
-  // Fuse's buffers, kept from frame to frame: a KITTI frame's covariances are large, and a new
-  // block every frame was paid again in page faults (docs/benchmarks.md, "Figures behind the
-  // frame pipeline's code").
-  std::vector<Eigen::Matrix3d> fuse_covariances_;
-  std::vector<Eigen::Vector3d> fuse_normals_;
 };
 
 }  // namespace rovermap::mapper

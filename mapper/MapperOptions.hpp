@@ -24,6 +24,13 @@ struct MapperOptions {
   /// sample spacing (range × median angular spacing of the frame). 0 = off.
   double outlier_radius_factor = 3.0;
   int outlier_min_neighbors = 2;
+  /// Stereo frames: the points the matcher registers (and keeps as the next frame's reference)
+  /// are merged into range-aware voxels whose edge is this many pixels' footprint at their
+  /// range (registration::RangeVoxelDownsample): a KITTI frame's 260 000 points, dense near
+  /// the rig and sparse far from it, become about 30 000 that sample the ground evenly. The
+  /// outlier test runs on the merged points; the DEM and the OctoMap still take every point of
+  /// a kept voxel [px]. 0 = register every point.
+  double registration_cell_px = 0.0;
 
   /// Register with the points' covariances (registration.use_uncertainty: pairs weighted by
   /// their inverse covariance, gated by Mahalanobis distance) whenever both frames carry them

@@ -2,10 +2,13 @@
 // Reading and step 1 (load, stereo, index) of frame k+1 beside steps 2-8 of frame k, so that
 // the cores the matcher leaves idle are used. One frame ahead only, so memory stays flat.
 
+#include <condition_variable>
 #include <cstddef>
 #include <future>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "io/FrameSource.hpp"
 #include "mapper/Mapper.hpp"
@@ -13,7 +16,9 @@
 namespace rovermap::mapper {
 
 /// Reads the frames of `source` in order and prepares each with `mapper.Prepare` on a thread
-/// of its own, one frame ahead of the caller. Both must outlive it; the caller must not use
+/// of its own (one for the whole run: a thread per frame started its own OpenMP team and
+/// malloc arena each time, whose large buffers were mapped and faulted in again every frame),
+/// one frame ahead of the caller. Both must outlive it; the caller must not use
 /// `source` meanwhile. Mapper::Prepare reads only what ProcessPrepared never changes, so the
 /// caller may process frame k while frame k+1 is prepared.
 class ReadAhead {
@@ -29,7 +34,7 @@ class ReadAhead {
   ReadAhead(io::FrameSource* source, const Mapper* mapper);
   ReadAhead(const ReadAhead&) = delete;
   ReadAhead& operator=(const ReadAhead&) = delete;
-  /// Waits for the frame in flight, if any.
+  /// Waits for the frame in flight, if any, and stops the thread.
   ~ReadAhead();
 
   /// The next frame, and starts preparing the one after. False after the last frame.
@@ -38,11 +43,20 @@ class ReadAhead {
 
  private:
   Item Fetch(std::size_t index);
+  void Request(std::size_t index);  // the thread fetches `index` into pending_
+  void Loop();
 
   io::FrameSource* source_;
   const Mapper* mapper_;
   std::size_t next_ = 0;
   std::future<Item> pending_;
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<std::size_t> requested_;  // guarded by mutex_
+  std::promise<Item> promise_;            // for requested_, guarded by mutex_
+  bool stop_ = false;                     // guarded by mutex_
+  std::thread thread_;                    // last: starts once the rest is built
 };
 
 }  // namespace rovermap::mapper

@@ -1,4 +1,3 @@
-#include "core/Units.hpp"
 #include "registration/Icp.hpp"
 
 #include <Eigen/Cholesky>
@@ -7,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/Units.hpp"
 #include "registration/Anderson.hpp"
 #include "registration/CloudGeometry.hpp"
 #include "registration/MotionSolver.hpp"
@@ -949,7 +949,13 @@ const KdTree& IndexedCloud::tree() const {
   return *tree_;
 }
 
+IndexedCloud::IndexedCloud(PointCloud cloud, const RegistrationOptions& options, double spacing_m)
+    : IndexedCloud(std::move(cloud), options) {
+  if (spacing_m > 0.0 && std::isfinite(spacing_m)) given_spacing_ = spacing_m;
+}
+
 double IndexedCloud::spacing() const {
+  if (given_spacing_ > 0.0) return given_spacing_;
   std::call_once(spacing_once_,
                  [this] { spacing_ = MedianNeighborSpacing(cloud_.points, tree()); });
   return spacing_;

@@ -26,6 +26,10 @@ class IndexedCloud {
   /// otherwise on demand, when `options` use orientations (orientation test, point-to-plane
   /// residual). The tree is built on first use.
   IndexedCloud(PointCloud cloud, const RegistrationOptions& options);
+  /// The same with the points' spacing known [m] (> 0): a cloud merged from a denser one keeps
+  /// the denser one's, so that Zhang's D (reference_distance_m 0) follows the sensor's sampling,
+  /// not the merge (mapper::Mapper::Prepare, MapperOptions::registration_cell_px).
+  IndexedCloud(PointCloud cloud, const RegistrationOptions& options, double spacing_m);
   IndexedCloud(const IndexedCloud&) = delete;
   IndexedCloud& operator=(const IndexedCloud&) = delete;
 
@@ -45,7 +49,8 @@ class IndexedCloud {
   /// Expected angular error of orientation(i) [rad] from the scatter of the neighbours it was
   /// fitted to; 0 for given normals (trusted). Valid once i has been required.
   double orientation_spread(std::size_t i) const { return spreads_.empty() ? 0.0 : spreads_[i]; }
-  /// Median nearest-neighbour spacing [m], computed on first use (only needed for D = 0).
+  /// Median nearest-neighbour spacing [m], as given, or computed on first use (only needed for
+  /// D = 0).
   double spacing() const;
 
  private:
@@ -61,6 +66,7 @@ class IndexedCloud {
   mutable std::mutex orientation_mutex_;
   mutable std::once_flag spacing_once_;
   mutable double spacing_ = 0.0;
+  double given_spacing_ = 0.0;
 };
 
 enum class RegistrationStatus {

@@ -368,9 +368,10 @@ struct CheckpointAccess {
             "frame " + std::to_string(index) +
             ": the registration reference could be read before, not now: " + loaded.reason);
       }
-      m->previous_ = std::make_unique<registration::IndexedCloud>(std::move(loaded.cloud),
-                                                                  m->options_.registration);
-      m->previous_landmarks_ = std::move(loaded.landmarks);
+      // As the frame was prepared when it became the reference (merged voxels, their D).
+      PreparedFrame prepared = m->Prepare(std::move(loaded));
+      m->previous_ = std::move(prepared.source);
+      m->previous_landmarks_ = std::move(prepared.loaded.landmarks);
     }
     std::vector<registration::PointCloud> local(r->Count(r->left()));
     for (registration::PointCloud& c : local) c = GetCloud(r);

@@ -89,6 +89,35 @@ void RefineSubpixel(const cv::Mat& left8, const cv::Mat& right8, int window, cv:
   }
 }
 
+double PixelSpacing(const std::vector<Eigen::Vector3d>& organised, int rows, int cols,
+                    std::size_t valid) {
+  constexpr std::size_t kSample = 16384;
+  const std::size_t stride = std::max<std::size_t>(1, valid / kSample);
+  std::vector<float> nearest;
+  nearest.reserve(std::min(valid, kSample + 1));
+  std::size_t seen = 0;
+  for (int v = 0; v < rows; ++v) {
+    for (int u = 0; u < cols; ++u) {
+      const Eigen::Vector3d& p = organised[static_cast<std::size_t>(v) * cols + u];
+      if (std::isnan(p.z()) || seen++ % stride != 0) continue;
+      double best = INFINITY;
+      for (int dv = -1; dv <= 1; ++dv) {
+        for (int du = -1; du <= 1; ++du) {
+          const int x = u + du, y = v + dv;
+          if ((du == 0 && dv == 0) || x < 0 || y < 0 || x >= cols || y >= rows) continue;
+          const Eigen::Vector3d& q = organised[static_cast<std::size_t>(y) * cols + x];
+          if (!std::isnan(q.z())) best = std::min(best, (q - p).squaredNorm());
+        }
+      }
+      if (std::isfinite(best)) nearest.push_back(static_cast<float>(std::sqrt(best)));
+    }
+  }
+  if (nearest.empty()) return 0.0;
+  const auto mid = nearest.begin() + static_cast<long>(nearest.size() / 2);
+  std::nth_element(nearest.begin(), mid, nearest.end());
+  return *mid;
+}
+
 void FillBetweenPixels(const std::vector<Eigen::Vector3d>& organised,
                        const std::vector<int>& point_of, int cols,
                        const registration::PointCloud& cloud, const StereoCamera& camera,
@@ -438,6 +467,7 @@ StereoPointsResult DisparityToPoints(const cv::Mat& disparity, const StereoCamer
   if (!point_of.empty()) {
     FillBetweenPixels(organised, point_of, cols, cloud, camera, T_body_sensor, o, &result.fill);
   }
+  result.spacing_m = PixelSpacing(organised, rows, cols, valid);
   result.merged = VoxelDownsample(&cloud, o.voxel_size_m);
   result.points_ms = MsSince(start);
   return result;

@@ -54,6 +54,10 @@ struct StereoPointsResult {
   std::size_t too_far = 0;            ///< range > max_range_m [count]
   std::size_t no_normal = 0;          ///< dropped: no neighbours for a normal [count]
   std::size_t merged = 0;             ///< points merged away by voxel downsampling [count]
+  /// Median distance from a point to the nearest point of its 8 neighbouring pixels, over an
+  /// even sample of at most 16 384 points: the spacing a k-d tree would measure, without one
+  /// [m]; 0 when no point has a neighbour.
+  double spacing_m = 0.0;
   double disparity_ms = 0.0;
   double points_ms = 0.0;
 };

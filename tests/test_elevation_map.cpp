@@ -936,3 +936,82 @@ TEST(ElevationMap, PublishedAgreesWithTheRuleThroughCellAcrossTileEdges) {
 
 }  // namespace
 }  // namespace rovermap::dem
+
+namespace rovermap::dem {
+namespace {
+
+// The no-copy FuseFrame (body-frame parts, a mask, the pose) against the plain one on the kept
+// points moved into the world and concatenated, measured then fill: the same cells, the same
+// counts, bit for bit.
+TEST(ElevationMap, FramePartsFuseAsTheirPointsMovedAndConcatenated) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto part = [&](std::size_t n, std::vector<Eigen::Vector3d>* p, std::vector<Eigen::Matrix3d>* c,
+                  std::vector<Eigen::Vector3d>* nrm) {
+    for (std::size_t i = 0; i < n; ++i) {
+      p->emplace_back(3.0 * u(rng) + 4.0, 3.0 * u(rng), 0.05 * u(rng) - 1.0);
+      const Eigen::Vector3d a(u(rng), u(rng), u(rng));
+      c->push_back(1e-4 * (Eigen::Matrix3d::Identity() + 0.5 * a * a.transpose()));
+      nrm->push_back(Eigen::Vector3d(0.2 * u(rng), 0.2 * u(rng), 1.0).normalized());
+    }
+  };
+  std::vector<Eigen::Vector3d> points, normals, fill_points, fill_normals;
+  std::vector<Eigen::Matrix3d> covs, fill_covs;
+  part(4000, &points, &covs, &normals);
+  part(3000, &fill_points, &fill_covs, &fill_normals);
+  std::vector<unsigned char> keep(points.size(), 1);
+  for (std::size_t i = 0; i < keep.size(); i += 7) keep[i] = 0;
+  const Eigen::Isometry3d T = Eigen::Translation3d(10.0, -5.0, 2.0) *
+                              Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.1, 0.2, 1.0).normalized());
+
+  FrameContext ctx;
+  ctx.frame = 3;
+  ctx.R_world_cov = T.linear();
+  ctx.sensor_origin_world = T * Eigen::Vector3d(0.2, 0.0, 1.0);
+  ctx.pose_covariance = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
+
+  std::vector<Eigen::Vector3d> world, all_normals;
+  std::vector<Eigen::Matrix3d> all_covs;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!keep[i]) continue;
+    world.push_back(T * points[i]);
+    all_covs.push_back(covs[i]);
+    all_normals.push_back(normals[i]);
+  }
+  FrameContext plain = ctx;
+  plain.fill_from = world.size();
+  for (std::size_t i = 0; i < fill_points.size(); ++i) {
+    world.push_back(T * fill_points[i]);
+    all_covs.push_back(fill_covs[i]);
+    all_normals.push_back(fill_normals[i]);
+  }
+  plain.normals = &all_normals;
+
+  ElevationMapOptions options;
+  options.cell_size_m = 0.1;
+  ElevationMap a(options), b(options);
+  const FusionStats sa = a.FuseFrame(world, all_covs, plain);
+  const FusionStats sb = b.FuseFrame(T, {&points, &covs, &normals, &keep},
+                                     {&fill_points, &fill_covs, &fill_normals, nullptr}, ctx);
+  EXPECT_GT(sa.fused, 1000u);
+  EXPECT_EQ(sa.points, sb.points);
+  EXPECT_EQ(sa.fused, sb.fused);
+  EXPECT_EQ(sa.candidate, sb.candidate);
+  EXPECT_EQ(sa.dropped_imprecise, sb.dropped_imprecise);
+  std::size_t cells = 0;
+  a.ForEachCell([&](CellIndex cell, const CellValue& va) {
+    const std::optional<CellValue> vb = b.Cell(cell);
+    ASSERT_TRUE(vb.has_value());
+    EXPECT_EQ(va.elevation_m, vb->elevation_m);
+    EXPECT_EQ(va.variance_m2, vb->variance_m2);
+    EXPECT_EQ(va.count, vb->count);
+    ++cells;
+  });
+  std::size_t cells_b = 0;
+  b.ForEachCell([&](CellIndex, const CellValue&) { ++cells_b; });
+  EXPECT_EQ(cells, cells_b);
+  EXPECT_GT(cells, 100u);
+}
+
+}  // namespace
+}  // namespace rovermap::dem
