@@ -106,6 +106,40 @@ TEST_F(CheckpointTest, SnapshotPlusJournalRestoresTheStateAndGoesOnIdentically) 
   ExpectSameState(*straight, *resumed);
 }
 
+// With registration on voxels (mapper.registration_cell_px), the restored reference is the
+// frame prepared as it was when it became the reference: its voxels and its spacing as D.
+TEST_F(CheckpointTest, AStereoReferenceOfVoxelsIsRestoredAsItWas) {
+  const io::SequenceReader stereo(fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo");
+  mapper::PipelineOptions options = Defaults();
+  options.mapper.registration_cell_px = 4.0;
+  options.octomap.enabled = false;
+  auto fresh = [&] { return std::make_unique<mapper::Mapper>(stereo.info(), options); };
+  auto straight = fresh();
+  for (std::size_t k = 0; k < 3; ++k) straight->ProcessFrame(stereo.Read(k));
+  {
+    auto first = fresh();
+    mapper::Checkpoint cp(dir_ / "cp", "config V");
+    mapper::DaemonState state;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const mapper::FrameResult r = first->ProcessFrame(stereo.Read(k));
+      state.next_index = k + 1;
+      cp.Append(&r, state);
+    }
+    cp.Save(*first, state);
+  }
+  auto resumed = fresh();
+  mapper::Checkpoint cp(dir_ / "cp", "config V");
+  cp.Restore(resumed.get(), [&](std::size_t k) { return stereo.Read(k); });
+  resumed->ProcessFrame(stereo.Read(2));
+  ASSERT_EQ(resumed->results().size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(resumed->results()[k].step.T_world_body.matrix(),
+              straight->results()[k].step.T_world_body.matrix())
+        << "frame " << k;
+  }
+  EXPECT_EQ(resumed->results()[2].iterations, straight->results()[2].iterations);
+}
+
 TEST_F(CheckpointTest, TornLastRecordIsDroppedAndTheJournalGoesOn) {
   {
     auto m = NewMapper();
