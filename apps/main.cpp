@@ -1,7 +1,6 @@
 // rovermap-full, the program behind the `rovermap` command (apps/Launcher.cpp runs it for every
 // subcommand but a plain `register`): parses the command line, runs one subcommand, and turns
 // typed errors into messages and exit statuses (docs/design.md §5).
-#include <malloc.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -13,6 +12,7 @@
 #include "apps/Commands.hpp"
 #include "apps/Startup.hpp"
 #include "config/ConfigError.hpp"
+#include "core/Heap.hpp"
 #include "io/IoError.hpp"
 #include "io/RegistrationPreview.hpp"
 
@@ -35,15 +35,7 @@ int main(int argc, char** argv) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
     ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
   }
-  // Every frame allocates and frees tens of MB (a KITTI frame's disparity, points, covariances).
-  // glibc maps blocks that large afresh and returns freed memory to the system, so each frame
-  // paid page faults for all of it again (docs/benchmarks.md, "Replay on real stereo"). Kept in
-  // the heap, the pages are reused: the peak stays that of the largest frames in flight.
-  if (many_frames) {
-    ::mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap
-    ::mallopt(M_TRIM_THRESHOLD, 1 << 30);   // never give the heap's free top back mid-run
-    ::mallopt(M_TOP_PAD, 64 << 20);         // grow a heap in large steps
-  }
+  if (many_frames) rovermap::core::KeepFreedMemoryInHeap();
   CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Help for every subcommand");

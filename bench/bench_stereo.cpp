@@ -7,8 +7,6 @@
 //
 // The pairs of the first table are rendered by the simulator (seed 1): no data files needed.
 
-#include <malloc.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -18,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Heap.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Mapper.hpp"
 #include "sim/Simulator.hpp"
@@ -51,11 +50,9 @@ rovermap::sim::SimOptions SimAt(int width, int height) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // The heap as `rovermap replay` keeps it (apps/main.cpp): a KITTI frame's points and
-  // covariances reuse freed pages instead of faulting new ones in every run.
-  ::mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  ::mallopt(M_TRIM_THRESHOLD, 1 << 30);
-  ::mallopt(M_TOP_PAD, 64 << 20);
+  // The heap as `rovermap replay` keeps it: a KITTI frame's points and covariances reuse freed
+  // pages instead of faulting new ones in every run.
+  rovermap::core::KeepFreedMemoryInHeap();
   int runs = 7;
   std::vector<std::string> sequences;
   for (int i = 1; i < argc; ++i) {

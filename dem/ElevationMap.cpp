@@ -337,7 +337,7 @@ FusionStats ElevationMap::FuseFrame(const Eigen::Isometry3d& T_world_points,
     q.n = size(f.points);
     q.cov = size(f.covariances) == q.n;
     q.normals = size(f.normals) == q.n;
-    q.masked = size(f.keep) == q.n && f.keep != nullptr;
+    q.masked = f.keep != nullptr && f.keep->size() == q.n;
     if (q.n == 0) continue;
     if (size(f.covariances) != 0 && !q.cov) ++covariances_ignored_;
     if (size(f.normals) != 0 && !q.normals) ++covariances_ignored_;

@@ -167,10 +167,9 @@ FrameResult Mapper::Process(const io::Frame& frame, PreparedFrame prepared, doub
   }
   FrameResult r = Begin(frame, prepared, load_ms);
   // 1. Load and prepare: done by Prepare, maybe on another thread while the last frame ran.
+  const registration::PointCloud& fused = prepared.Fused();  // lives on in `source` below
   std::unique_ptr<registration::IndexedCloud> source = std::move(prepared.source);
   const OutlierMask& isolated = prepared.isolated;
-  const registration::PointCloud& fused =
-      prepared.loaded.cloud.empty() ? source->cloud() : prepared.loaded.cloud;
 
   // 2-5. Predict from dead reckoning, register onto the reference, judge, blend per direction
   // (or, re-applying a journalled frame, what that gave).
