@@ -16,6 +16,7 @@
 
 #include "apps/Commands.hpp"
 #include "apps/Startup.hpp"
+#include "core/Heap.hpp"
 
 namespace fs = std::filesystem;
 using namespace rovermap::apps;
@@ -37,6 +38,18 @@ fs::path FullProgram() {
 int main(int argc, char** argv) {
   std::signal(SIGXFSZ, SIG_IGN);  // as rovermap-full (see main.cpp)
   if (RunsInLauncher(argc, argv)) {
+    // OpenMP threads that wait passively: spinning, a one-shot registration of the bunny took
+    // 110-220 ms instead of 70-85 whenever another job shared the 2 cores, and gained nothing on
+    // a quiet machine (docs/benchmarks.md, "One-shot registration"). libgomp reads the policy
+    // before main, so it is set by running this small program again (once; a user's setting is
+    // kept).
+    if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
+      ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+      ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
+    }
+    // Freed blocks reused instead of mapped afresh: the trees and the sample's tables come and
+    // go, and every fresh page is a fault.
+    rovermap::core::KeepFreedMemoryInHeap();
     CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
     app.require_subcommand(1);
     app.set_help_all_flag("--help-all", "Help for every subcommand");  // its messages name it
@@ -51,7 +64,8 @@ int main(int argc, char** argv) {
     return RunReportingErrors([&] { return RunRegister(args, PreviewWriter()); });
   }
   // Set here, so that rovermap-full need not run itself again for it (see main.cpp).
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr && RunsManyFrames(argc, argv))
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr &&
+      (RunsManyFrames(argc, argv) || std::string(argv[1]) == "register"))
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
   const fs::path full = FullProgram();
   ::execv(full.c_str(), argv);

@@ -27,9 +27,10 @@ int main(int argc, char** argv) {
   // 2-core machine (a rover's computer runs more than the mapper) the spinning thread takes the
   // core its partner needs (docs/replay.md, "Threads"). libgomp reads OMP_WAIT_POLICY when it is
   // loaded, before main, so the default is set by running this program again with it (once; a
-  // user's setting is kept). Only for the commands that run many frames: loading the program's
-  // libraries again (GDAL's among them) would cost a one-shot command more than spinning does
-  // (docs/benchmarks.md, "One-shot registration").
+  // user's setting is kept; the launcher sets it before it becomes this program, so the run
+  // again is for a direct start). Only for the commands that run many frames: loading the
+  // program's libraries again (GDAL's among them) would cost a one-shot command more than
+  // spinning does.
   const bool many_frames = RunsManyFrames(argc, argv);
   if (std::getenv("OMP_WAIT_POLICY") == nullptr && many_frames) {
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);

@@ -157,7 +157,7 @@ struct QueryMemo {
 
 // Closest points in `to` of every `step`-th `from` point listed in `queries`, mapped by
 // T_to_from, within `dmax`, then the orientation test (Zhang 1994, §4.1 and §4.2).
-// `memos` holds, per point of `from`, what its last search found (QueryMemo, updated here);
+// `memos` holds, per entry of `queries`, what its last search found (QueryMemo, updated here);
 // the result does not depend on it; `*searches` counts the tree searches. With `need_orientations`
 // the matched `to` points' orientations are made available (the queried `from` points' must
 // already be, for the orientation test). Returns how many pairs the orientation test rejected.
@@ -181,9 +181,9 @@ std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
     const std::size_t i = queries[static_cast<std::size_t>(q) * step];
     const Eigen::Vector3d p = T_to_from * pts[i];
     bool searched = false;
-    const Neighbor nb =
-        (*memos)[i].Lookup(tree, to.cloud().points, p,
-                           spread.Radius(p, dmax, kSeedGateSearchSigmas), reuse, &searched);
+    const Neighbor nb = (*memos)[static_cast<std::size_t>(q) * step].Lookup(
+        tree, to.cloud().points, p, spread.Radius(p, dmax, kSeedGateSearchSigmas), reuse,
+        &searched);
     searched_total += searched;
     if (!nb.found) continue;
     local[static_cast<std::size_t>(q)] =
@@ -216,9 +216,10 @@ std::size_t MatchDirection(const IndexedCloud& from, const IndexedCloud& to,
   return rejected;
 }
 
-// Every `step`-th of `indices`: the points a coarse iteration queries.
-std::vector<std::size_t> EveryKth(const std::vector<std::size_t>& indices, std::size_t step) {
-  std::vector<std::size_t> kept;
+// Every `step`-th of `indices`: the points a coarse iteration queries (and their memos).
+template <typename T>
+std::vector<T> EveryKth(const std::vector<T>& indices, std::size_t step) {
+  std::vector<T> kept;
   kept.reserve((indices.size() + step - 1) / step);
   for (std::size_t k = 0; k < indices.size(); k += step) kept.push_back(indices[k]);
   return kept;
@@ -616,8 +617,10 @@ class MatchingLoop {
           Decimate(VoxelSample(target_.cloud().points, voxel_m), options_.max_sample_points);
     result->sample_points = source_sample_.size();
     PlanStages();
-    forward_memos_.resize(source_.cloud().size());
-    backward_memos_.resize(symmetric_ ? target_.cloud().size() : 0);
+    // One memo per sampled point, not per point: a KITTI frame's 260 000 memos were 15 MB to
+    // clear per direction and frame, and a one-shot registration's page faults.
+    forward_memos_.assign(source_sample_.size(), QueryMemo());
+    backward_memos_.assign(symmetric_ ? target_sample_.size() : 0, QueryMemo());
     return true;
   }
 
@@ -636,6 +639,8 @@ class MatchingLoop {
         const auto clean_step = static_cast<std::size_t>(options_.clean_sample_step);
         source_sample_ = EveryKth(source_sample_, clean_step);
         target_sample_ = EveryKth(target_sample_, clean_step);
+        forward_memos_ = EveryKth(forward_memos_, clean_step);
+        backward_memos_ = EveryKth(backward_memos_, clean_step);
         result->sample_points = source_sample_.size();
       }
     } else {
