@@ -1,9 +1,11 @@
 #!/bin/bash
-# bench_serve.sh [BUILD_DIR] [--runs N] [--long N]: the daemon's overhead and its restart time.
+# bench_serve.sh [BUILD_DIR] [--runs N] [--long N] [--sequence DIR ...]: the daemon's overhead
+# and its restart time.
 #
 # Table 1: frames per second of `rovermap replay` and of `rovermap serve` (every frame already in
 # the inbox, so the daemon never waits; serve.publish_every 1 and 10) on the default simulated
-# stereo traverse and a cloud traverse, runs interleaved, medians. Serve's time runs from its
+# stereo traverse and a cloud traverse, and on each --sequence given (a recorded one, e.g.
+# datasets/kitti_stereo51), runs interleaved, medians. Serve's time runs from its
 # start until summary.json covers the last frame (its publishing and checkpoints included).
 # Table 2: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
 # -9 in the middle of the snapshot at that frame, so that the last checkpoint_every (10) frames
@@ -13,10 +15,12 @@ set -euo pipefail
 BUILD=build
 RUNS=3
 LONG=500
+SEQUENCES=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --runs) RUNS=$2; shift 2 ;;
     --long) LONG=$2; shift 2 ;;
+    --sequence) SEQUENCES+=("$(cd "$2" && pwd)"); shift 2 ;;
     *) BUILD=$1; shift ;;
   esac
 done
@@ -40,7 +44,8 @@ make_inbox() {
   for ((k = 0; k < n; k++)); do
     s=$(printf %06d $k)
     for ext in left.png right.png ply; do
-      [[ -f "$seq/frames/$s.$ext" ]] && ln "$seq/frames/$s.$ext" "$inbox/frames/$s.$ext"
+      [[ -f "$seq/frames/$s.$ext" ]] && { ln "$seq/frames/$s.$ext" "$inbox/frames/" 2>/dev/null ||
+        cp "$seq/frames/$s.$ext" "$inbox/frames/"; }
     done
   done
   return 0
@@ -76,8 +81,9 @@ echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
 
 printf '\n%-30s %8s %10s %12s %12s %10s %10s\n' "sequence" "frames" "replay f/s" "serve p=1" \
   "serve p=10" "p=1/rep" "p=10/rep"
-for name in stereo cloud; do
-  seq="$W/$name"; n=$(frames_of "$seq")
+for seq in "$W/stereo" "$W/cloud" ${SEQUENCES[@]+"${SEQUENCES[@]}"}; do
+  case "$seq" in "$W/"*) name="sim ${seq##*/}" ;; *) name=${seq##*/} ;; esac
+  n=$(frames_of "$seq")
   make_inbox "$seq" "$W/inbox" "$n"
   rep=(); s1=(); s10=()
   for ((i = 0; i < RUNS; i++)); do
@@ -88,7 +94,7 @@ for name in stereo cloud; do
   r=$(printf '%s\n' "${rep[@]}" | median)
   a=$(printf '%s\n' "${s1[@]}" | median)
   b=$(printf '%s\n' "${s10[@]}" | median)
-  printf '%-30s %8d %10.2f %12.2f %12.2f %10.2f %10.2f\n' "sim $name" "$n" \
+  printf '%-30s %8d %10.2f %12.2f %12.2f %10.2f %10.2f\n' "$name" "$n" \
     "$(calc "$n / $r")" "$(calc "$n / $a")" "$(calc "$n / $b")" \
     "$(calc "$r / $a")" "$(calc "$r / $b")"
 done

@@ -225,13 +225,42 @@ std::vector<T> EveryKth(const std::vector<T>& indices, std::size_t step) {
   return kept;
 }
 
+// R C Rᵀ for a symmetric C, its upper triangle computed and mirrored: the gate and the weights
+// are a visible share of a stereo replay's CPU (docs/benchmarks.md, "Figures behind the
+// matcher's code").
+inline Eigen::Matrix3d SymmetricSandwich(const Eigen::Matrix3d& R, const Eigen::Matrix3d& C) {
+  const Eigen::Matrix3d RC = R * C;
+  Eigen::Matrix3d out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i; j < 3; ++j) {
+      out(i, j) = RC.row(i).dot(R.row(j));
+      out(j, i) = out(i, j);
+    }
+  }
+  return out;
+}
+
+// dᵀ G⁻¹ d for a symmetric positive-definite G, by its adjugate (six cofactors) and determinant:
+// no inverse formed. +inf when G is not positive definite (det ≤ 0), so that no gate passes it.
+inline double MahalanobisSquared(const Eigen::Matrix3d& G, const Eigen::Vector3d& d) {
+  const double a = G(0, 0), b = G(0, 1), c = G(0, 2), e = G(1, 1), f = G(1, 2), g = G(2, 2);
+  const double A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
+  const double det = a * A + b * B + c * C;
+  if (!(det > 0.0)) return std::numeric_limits<double>::infinity();
+  const double D = a * g - c * c, E = b * c - a * f, F = a * e - b * b;
+  const double x = d.x(), y = d.y(), z = d.z();
+  const double quad = A * x * x + D * y * y + F * z * z + 2.0 * (B * x * y + C * x * z + E * y * z);
+  return quad / det;
+}
+
 // Combined covariance of a pair's residual, R Λx Rᵀ + Λy (§4.4), plus an isotropic
 // `sampling_variance` for the offset between non-coincident samples, which the sensor
 // covariance does not describe (without it the gate rejects most pairs of data sampled
 // coarser than its noise).
-Eigen::Matrix3d PairCovariance(const PointCloud& source, const PointCloud& target, const Match& m,
-                               const Eigen::Matrix3d& rotation, double sampling_variance) {
-  return rotation * source.covariances[m.source_index] * rotation.transpose() +
+inline Eigen::Matrix3d PairCovariance(const PointCloud& source, const PointCloud& target,
+                                      const Match& m, const Eigen::Matrix3d& rotation,
+                                      double sampling_variance) {
+  return SymmetricSandwich(rotation, source.covariances[m.source_index]) +
          target.covariances[m.target_index] + sampling_variance * Eigen::Matrix3d::Identity();
 }
 
@@ -263,14 +292,7 @@ double GateAndWeight(const IndexedCloud& source, const IndexedCloud& target, con
   Eigen::Matrix3d gate = pair;
   gate.diagonal().array() += sampling_variance;
   if (spread.Open()) gate += spread.At(p);
-  // Eigen inverts a fixed 3×3 by cofactors: a fraction of an LDLT's cost, and the gate and
-  // the weights are a visible share of a stereo replay's CPU (docs/benchmarks.md, "Figures
-  // behind the matcher's code"). The matrix is SPD: a positive determinant is the only check
-  // needed.
-  bool invertible = false;
-  Eigen::Matrix3d inverse;
-  gate.computeInverseWithCheck(inverse, invertible, 0.0);
-  if (!invertible || !(d.dot(inverse * d) <= options.mahalanobis_gate)) return -1.0;
+  if (!(MahalanobisSquared(gate, d) <= options.mahalanobis_gate)) return -1.0;
   if (EffectiveResidual(options) == Residual::kPointToPlane) {
     const Eigen::Vector3d n = PairNormal(source, target, m, T.linear());
     const double var = n.dot(pair * n);

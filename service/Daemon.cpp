@@ -291,8 +291,9 @@ void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files,
   ahead_.reset();
   if (following != nullptr) {
     // The files are copied: the scan's map is gone when the task reads them.
-    ahead_.emplace(index + 1, std::async(std::launch::async, &Daemon::ReadAndPrepare, this,
-                                         index + 1, *following));
+    ahead_.emplace(index + 1, reader_.Submit([this, next = index + 1, files = *following] {
+      return ReadAndPrepare(next, files);
+    }));
   }
   io::Frame& frame = read.frame;
   const std::optional<std::string>& unreadable = read.unreadable;

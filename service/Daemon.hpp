@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/TaskThread.hpp"
 #include "eval/EvalOptions.hpp"
 #include "io/Inbox.hpp"
 #include "mapper/Mapper.hpp"
@@ -133,6 +134,7 @@ class Daemon {
   // mapper and the inbox it uses.
   std::optional<std::pair<std::size_t, std::future<ReadFrame>>> ahead_;
   std::size_t read_ahead_ = 0;  // frames this session that came from ahead_
+  core::TaskThread reader_;     // reads ahead_; after what its tasks use, so joined before it
   OutputPublisher publisher_;   // last: destroyed (joined) first
 };
 
