@@ -43,10 +43,7 @@ int main(int argc, char** argv) {
     // a quiet machine (docs/benchmarks.md, "One-shot registration"). libgomp reads the policy
     // before main, so it is set by running this small program again (once; a user's setting is
     // kept).
-    if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
-      ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
-      ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
-    }
+    RunAgainWithPassiveOpenMp(argv);
     // Freed blocks reused instead of mapped afresh: the trees and the sample's tables come and
     // go, and every fresh page is a fault.
     rovermap::core::KeepFreedMemoryInHeap();
@@ -64,8 +61,7 @@ int main(int argc, char** argv) {
     return RunReportingErrors([&] { return RunRegister(args, PreviewWriter()); });
   }
   // Set here, so that rovermap-full need not run itself again for it (see main.cpp).
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr &&
-      (RunsManyFrames(argc, argv) || std::string(argv[1]) == "register"))
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr && WaitsPassively(argc, argv))
     ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
   const fs::path full = FullProgram();
   ::execv(full.c_str(), argv);

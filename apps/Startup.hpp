@@ -1,6 +1,9 @@
 #pragma once
 // How the `rovermap` command starts (apps/Launcher.cpp, apps/main.cpp).
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <string>
 
 namespace rovermap::apps {
@@ -12,6 +15,21 @@ inline bool RunsManyFrames(int argc, char** argv) {
   const std::string command = argv[1];
   return command == "replay" || command == "serve" || command == "campaign" ||
          command == "mosaic" || command == "simulate";
+}
+
+/// The subcommands whose OpenMP threads wait passively unless the environment says otherwise:
+/// those that run many frames, and `register` (docs/benchmarks.md, "One-shot registration").
+inline bool WaitsPassively(int argc, char** argv) {
+  return RunsManyFrames(argc, argv) || (argc >= 2 && std::string(argv[1]) == "register");
+}
+
+/// Runs this program again with OMP_WAIT_POLICY=PASSIVE unless the environment sets it (libgomp
+/// reads it when it loads, before main). Returns only when it did not: set already, or execv
+/// failed, in which case the program goes on as it is.
+inline void RunAgainWithPassiveOpenMp(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  ::execv("/proc/self/exe", argv);
 }
 
 /// Whether the launcher runs this command line itself: `register` without --preview (a PNG:

@@ -32,10 +32,7 @@ int main(int argc, char** argv) {
   // program's libraries again (GDAL's among them) would cost a one-shot command more than
   // spinning does.
   const bool many_frames = RunsManyFrames(argc, argv);
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr && many_frames) {
-    ::setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
-    ::execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
-  }
+  if (many_frames) RunAgainWithPassiveOpenMp(argv);
   if (many_frames) rovermap::core::KeepFreedMemoryInHeap();
   CLI::App app{"rovermap: incremental DEM mapping from correlation-stereo frames"};
   app.require_subcommand(1);

@@ -10,46 +10,9 @@
 namespace rovermap::mapper {
 
 ReadAhead::ReadAhead(io::FrameSource* source, const Mapper* mapper)
-    : source_(source), mapper_(mapper), next_(source->next_index()), thread_([this] { Loop(); }) {
-  if (next_ < source_->frame_count()) Request(next_);
-}
-
-ReadAhead::~ReadAhead() {
-  if (pending_.valid()) pending_.wait();
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    stop_ = true;
-  }
-  wake_.notify_one();
-  thread_.join();
-}
-
-void ReadAhead::Request(std::size_t index) {
-  {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    promise_ = std::promise<Item>();
-    pending_ = promise_.get_future();
-    requested_ = index;
-  }
-  wake_.notify_one();
-}
-
-void ReadAhead::Loop() {
-  std::unique_lock<std::mutex> lock(mutex_);
-  for (;;) {
-    wake_.wait(lock, [this] { return stop_ || requested_.has_value(); });
-    if (stop_) return;
-    const std::size_t index = *requested_;
-    requested_.reset();
-    std::promise<Item> promise = std::move(promise_);
-    lock.unlock();
-    try {
-      promise.set_value(Fetch(index));
-    } catch (...) {
-      promise.set_exception(std::current_exception());  // Next rethrows it
-    }
-    lock.lock();
-  }
+    : source_(source), mapper_(mapper), next_(source->next_index()) {
+  if (next_ < source_->frame_count())
+    pending_ = thread_.Submit([this, index = next_] { return Fetch(index); });
 }
 
 ReadAhead::Item ReadAhead::Fetch(std::size_t index) {
@@ -76,7 +39,8 @@ bool ReadAhead::Next(Item* item) {
   if (!pending_.valid()) return false;
   *item = pending_.get();  // rethrows what Fetch threw
   ++next_;
-  if (next_ < source_->frame_count()) Request(next_);
+  if (next_ < source_->frame_count())
+    pending_ = thread_.Submit([this, index = next_] { return Fetch(index); });
   return true;
 }
 

@@ -2,14 +2,12 @@
 // Reading and step 1 (load, stereo, index) of frame k+1 beside steps 2-8 of frame k, so that
 // the cores the matcher leaves idle are used. One frame ahead only, so memory stays flat.
 
-#include <condition_variable>
 #include <cstddef>
 #include <future>
-#include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
+#include "core/TaskThread.hpp"
 #include "io/FrameSource.hpp"
 #include "mapper/Mapper.hpp"
 
@@ -34,8 +32,8 @@ class ReadAhead {
   ReadAhead(io::FrameSource* source, const Mapper* mapper);
   ReadAhead(const ReadAhead&) = delete;
   ReadAhead& operator=(const ReadAhead&) = delete;
-  /// Waits for the frame in flight, if any, and stops the thread.
-  ~ReadAhead();
+  /// Waits for the frame in flight, if any, and stops the thread (TaskThread's destructor).
+  ~ReadAhead() = default;
 
   /// The next frame, and starts preparing the one after. False after the last frame.
   /// Rethrows what reading threw other than io::IoError (which becomes `error`).
@@ -43,20 +41,12 @@ class ReadAhead {
 
  private:
   Item Fetch(std::size_t index);
-  void Request(std::size_t index);  // the thread fetches `index` into pending_
-  void Loop();
 
   io::FrameSource* source_;
   const Mapper* mapper_;
   std::size_t next_ = 0;
-  std::future<Item> pending_;
-
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::optional<std::size_t> requested_;  // guarded by mutex_
-  std::promise<Item> promise_;            // for requested_, guarded by mutex_
-  bool stop_ = false;                     // guarded by mutex_
-  std::thread thread_;                    // last: starts once the rest is built
+  std::future<Item> pending_;  // the frame in flight
+  core::TaskThread thread_;    // last: drained and joined before the rest goes
 };
 
 }  // namespace rovermap::mapper
