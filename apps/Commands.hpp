@@ -98,6 +98,16 @@ CLI::App* AddMosaicCommand(CLI::App* app, MosaicArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunMosaic(const MosaicArgs& args);
 
+struct TerrainArgs {
+  ConfigArgs config;
+  std::string dem;     ///< any north-up DEM GeoTIFF in metres (dem.tif, a mosaic, another tool's)
+  std::string out;     ///< folder for terrain.tif and terrain.png
+  bool force = false;  ///< replace them
+};
+CLI::App* AddTerrainCommand(CLI::App* app, TerrainArgs* args);
+/// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
+int RunTerrain(const TerrainArgs& args);
+
 struct CampaignArgs {
   ConfigArgs config;
   std::vector<std::string> inputs;  ///< recordings (sequence directories or bags)

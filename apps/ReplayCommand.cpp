@@ -90,7 +90,7 @@ void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
 }  // namespace
 
 mapper::PipelineOptions PipelineFrom(const config::Config& cfg) {
-  return {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
+  return {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap, cfg.terrain};
 }
 
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {

@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
   CLI::App* serve_cmd = AddServeCommand(&app, &serve_args);
   MosaicArgs mosaic_args;
   CLI::App* mosaic_cmd = AddMosaicCommand(&app, &mosaic_args);
+  TerrainArgs terrain_args;
+  CLI::App* terrain_cmd = AddTerrainCommand(&app, &terrain_args);
   CampaignArgs campaign_args;
   CLI::App* campaign_cmd = AddCampaignCommand(&app, &campaign_args);
   CampaignTaskArgs campaign_task_args;
@@ -72,6 +74,7 @@ int main(int argc, char** argv) {
     if (serve_cmd->parsed()) return RunServe(serve_args);
     if (import_cmd->parsed()) return RunImport(import_args);
     if (mosaic_cmd->parsed()) return RunMosaic(mosaic_args);
+    if (terrain_cmd->parsed()) return RunTerrain(terrain_args);
     if (campaign_cmd->parsed()) return RunCampaign(campaign_args);
     if (campaign_task_cmd->parsed()) return RunCampaignTask(campaign_task_args);
     return kExitUsage;

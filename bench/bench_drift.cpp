@@ -89,7 +89,7 @@ void Dump(const fs::path& dir, const Sequence& seq, const std::string& name, con
 Run RunRovermap(const Sequence& seq, mapper::Reference reference, bool own_normals) {
   const config::Config defaults;
   mapper::PipelineOptions options{defaults.mapper, defaults.registration, defaults.stereo,
-                                  defaults.dem, defaults.octomap};
+                                  defaults.dem, defaults.octomap, defaults.terrain};
   options.mapper.reference = reference;
   io::SequenceReader reader(seq.dir);
   mapper::Mapper mapper(reader.info(), options);

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   if (frame_counts.empty()) frame_counts = {30, 200};
   const config::Config defaults;
   const mapper::PipelineOptions options{defaults.mapper, defaults.registration, defaults.stereo,
-                                        defaults.dem, defaults.octomap};
+                                        defaults.dem, defaults.octomap, defaults.terrain};
   const fs::path scratch =
       fs::temp_directory_path() / ("rovermap_bench_publish." + std::to_string(getpid()));
   fs::create_directories(scratch / "out");

@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
   }
   const config::Config defaults;
   mapper::PipelineOptions options{defaults.mapper, defaults.registration, defaults.stereo,
-                                  defaults.dem, defaults.octomap};
+                                  defaults.dem, defaults.octomap, defaults.terrain};
   options.octomap.enabled = octomap;
   const fs::path scratch =
       fs::temp_directory_path() / ("rovermap_bench_replay." + std::to_string(getpid()));

@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
   const config::Config cfg = config::LoadConfig(
       config_file.empty() ? std::nullopt : std::optional<std::filesystem::path>(config_file),
       overrides);
-  mapper::PipelineOptions options{cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap};
+  mapper::PipelineOptions options{cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap, cfg.terrain};
   options.octomap.enabled = false;  // not compared; it only costs time here
 
   struct Model {

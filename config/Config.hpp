@@ -18,6 +18,7 @@
 #include "registration/Options.hpp"
 #include "sim/SimOptions.hpp"
 #include "stereo/StereoOptions.hpp"
+#include "terrain/TerrainOptions.hpp"
 
 namespace rovermap::config {
 
@@ -41,6 +42,7 @@ struct Config {
   sim::SimOptions sim;
   dem::ElevationMapOptions dem;
   dem::OctoMapOptions octomap;
+  terrain::TerrainOptions terrain;
   eval::EvalOptions eval;
   mapper::MapperOptions mapper;
   mapper::ServeOptions serve;

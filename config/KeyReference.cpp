@@ -35,6 +35,9 @@ const std::map<std::string, std::string>& SectionLeads() {
       {"octomap",
        "The OctoMap occupancy tree `replay` and `serve` fuse the frames into (map.bt, and map.ot "
        "when asked)."},
+      {"terrain",
+       "What a planner reads from the DEM (terrain.tif, terrain.png of `replay`, `serve` and "
+       "`terrain`): the rover's footprint and its limits of slope, step and roughness."},
       {"eval",
        "Trajectory metrics, of `eval` and of summary.json: pairing estimated poses with ground "
        "truth, relative pose error and KITTI-style segments."},

@@ -276,6 +276,24 @@ std::vector<KeyEntry> BuildRegistry() {
               "occupancy update of a traversed voxel");
   octo.Bool("write_ot", &O::write_ot, "also write map.ot (with probabilities)");
 
+  using T = terrain::TerrainOptions;
+  SectionKeys<T> ter(keys, "terrain", &Config::terrain);
+  ter.Bool("enabled", &T::enabled, "write terrain.tif and terrain.png with the DEM");
+  ter.Double("footprint_m", &T::footprint_m, "m", GreaterThan(0),
+             "side of the square footprint the layers are computed over (the rover's size)");
+  ter.Double("max_slope_deg", &T::max_slope_deg, "deg", Bounds{0, true, 90, true},
+             "steepest plane the rover may stand on");
+  ter.Double("max_step_m", &T::max_step_m, "m", GreaterThan(0),
+             "largest height difference within the footprint");
+  ter.Double("max_roughness_m", &T::max_roughness_m, "m", GreaterThan(0),
+             "largest RMS residual of the footprint's plane");
+  ter.Double("min_coverage", &T::min_coverage, "ratio", OpenClosed(0, 1),
+             "footprint cells that must hold a height, else unknown");
+  ter.Double("uncertainty_sigmas", &T::uncertainty_sigmas, "sigma", AtLeast(0),
+             "a limit within this many sigma of its layer marks the cell uncertain");
+  ter.Int("tile_cells", &T::tile_cells, "cells", Bounds{16, false, 4096, false},
+          "computed tile by tile, tiles in parallel");
+
   using E = eval::EvalOptions;
   SectionKeys<E> ev(keys, "eval", &Config::eval);
   ev.Double("association_tolerance_s", &E::association_tolerance_s, "s", AtLeast(0),

@@ -7,6 +7,8 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <Eigen/Core>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -76,60 +78,77 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const dem::Elevat
   return WriteDemGeoTiff(path, layers, georef, options);
 }
 
-GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const DemLayers& layers,
-                            const Georeference& georef, const GeoTiffOptions& options) {
+static std::array<double, 6> DemGeotransform(const DemLayers& layers, const Georeference& georef) {
   if (std::abs(layers.grid_rotation_rad - georef.convergence_rad()) > 1e-9) {
     throw std::invalid_argument(
         "WriteDemGeoTiff: the map's grid_rotation_rad must equal the georeference's "
         "convergence_rad() so that the raster is north-up without resampling");
   }
-  if (path.empty() || !path.has_filename()) throw IoError(path.string() + ": not a file path");
-  const std::size_t pixels =
-      static_cast<std::size_t>(layers.width) * static_cast<std::size_t>(layers.height);
-  if (layers.elevation_m.size() != pixels || layers.stddev_m.size() != pixels ||
-      layers.count.size() != pixels) {
-    throw std::invalid_argument("WriteDemGeoTiff: layers of the wrong size");
-  }
-  RegisterGdal();
-  QuietGdal quiet;
-  GeoTiffInfo info;
-  info.width = layers.width;
-  info.height = layers.height;
-  info.valid_cells = layers.valid_cells;
-
   const double s = layers.cell_size_m;
   const double k = georef.scale_factor();
   const Eigen::Vector2d top_left = georef.GridToProjected(
       {static_cast<double>(layers.min.x) * s, static_cast<double>(layers.max.y + 1) * s});
-  info.geotransform = {top_left.x(), k * s, 0.0, top_left.y(), 0.0, -k * s};
+  return {top_left.x(), k * s, 0.0, top_left.y(), 0.0, -k * s};
+}
+
+RasterFrame DemRasterFrame(const DemLayers& layers, const Georeference& georef) {
+  RasterFrame frame;
+  frame.width = layers.width;
+  frame.height = layers.height;
+  frame.geotransform = DemGeotransform(layers, georef);
+  frame.wkt = georef.wkt();
+  frame.metadata = {
+      {"ELEVATION_DATUM", "height above the origin altitude " +
+                              std::to_string(georef.origin().altitude_m) + " m (world z, ENU up)"},
+      {"ORIGIN_LAT_LON", std::to_string(georef.origin().latitude_deg) + " " +
+                             std::to_string(georef.origin().longitude_deg)}};
+  return frame;
+}
+
+GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const DemLayers& layers,
+                            const Georeference& georef, const GeoTiffOptions& options) {
+  const RasterFrame frame = DemRasterFrame(layers, georef);
+  GeoTiffInfo info = WriteFloatGeoTiff(path, frame,
+                                       {{&layers.elevation_m, "elevation", "m"},
+                                        {&layers.stddev_m, "elevation_stddev", "m"},
+                                        {&layers.count, "count", ""}},
+                                       options);
+  info.valid_cells = layers.valid_cells;
+  return info;
+}
+
+GeoTiffInfo WriteFloatGeoTiff(const std::filesystem::path& path, const RasterFrame& frame,
+                              const std::vector<RasterBand>& bands, const GeoTiffOptions& options) {
+  if (path.empty() || !path.has_filename()) throw IoError(path.string() + ": not a file path");
+  const std::size_t pixels =
+      static_cast<std::size_t>(frame.width) * static_cast<std::size_t>(frame.height);
+  if (bands.empty()) throw std::invalid_argument("WriteFloatGeoTiff: no band");
+  for (const RasterBand& band : bands) {
+    if (band.data == nullptr || band.data->size() != pixels)
+      throw std::invalid_argument("WriteFloatGeoTiff: band " + band.name + " of the wrong size");
+  }
+  RegisterGdal();
+  QuietGdal quiet;
+  GeoTiffInfo info;
+  info.width = frame.width;
+  info.height = frame.height;
+  info.geotransform = frame.geotransform;
 
   GDALDriver* mem_driver = GetGDALDriverManager()->GetDriverByName("MEM");
   GDALDriver* cog_driver = GetGDALDriverManager()->GetDriverByName("COG");
   if (mem_driver == nullptr || cog_driver == nullptr)
     Fail(path, "GDAL lacks the MEM or COG driver");
-  DatasetPtr mem(mem_driver->Create("", info.width, info.height, 3, GDT_Float32, nullptr));
+  DatasetPtr mem(mem_driver->Create("", info.width, info.height, static_cast<int>(bands.size()),
+                                    GDT_Float32, nullptr));
   if (!mem) Fail(path, "cannot create the in-memory raster");
   mem->SetGeoTransform(info.geotransform.data());
-  if (mem->SetProjection(georef.wkt().c_str()) != CE_None) Fail(path, "cannot set the CRS");
-  mem->SetMetadataItem("ELEVATION_DATUM",
-                       ("height above the origin altitude " +
-                        std::to_string(georef.origin().altitude_m) + " m (world z, ENU up)")
-                           .c_str());
-  mem->SetMetadataItem("ORIGIN_LAT_LON", (std::to_string(georef.origin().latitude_deg) + " " +
-                                          std::to_string(georef.origin().longitude_deg))
-                                             .c_str());
-  struct BandSpec {
-    const std::vector<float>* data;
-    const char* name;
-    const char* unit;
-  };
-  const BandSpec bands[3] = {{&layers.elevation_m, "elevation", "m"},
-                             {&layers.stddev_m, "elevation_stddev", "m"},
-                             {&layers.count, "count", ""}};
-  for (int b = 0; b < 3; ++b) {
-    GDALRasterBand* band = mem->GetRasterBand(b + 1);
-    band->SetDescription(bands[b].name);
-    if (*bands[b].unit != '\0') band->SetUnitType(bands[b].unit);
+  if (!frame.wkt.empty() && mem->SetProjection(frame.wkt.c_str()) != CE_None)
+    Fail(path, "cannot set the CRS");
+  for (const auto& [key, value] : frame.metadata) mem->SetMetadataItem(key.c_str(), value.c_str());
+  for (std::size_t b = 0; b < bands.size(); ++b) {
+    GDALRasterBand* band = mem->GetRasterBand(static_cast<int>(b) + 1);
+    band->SetDescription(bands[b].name.c_str());
+    if (!bands[b].unit.empty()) band->SetUnitType(bands[b].unit.c_str());
     band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
     // GF_Write only reads the buffer; RasterIO takes it as void* for both directions.
     void* data = const_cast<float*>(bands[b].data->data());
@@ -138,6 +157,7 @@ GeoTiffInfo WriteDemGeoTiff(const std::filesystem::path& path, const DemLayers& 
       Fail(path, "cannot fill band " + std::to_string(b + 1));
     }
   }
+  for (float v : *bands.front().data) info.valid_cells += std::isnan(v) ? 0 : 1;
 
   char** create = nullptr;
   create = CSLSetNameValue(create, "COMPRESS", "DEFLATE");

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
@@ -33,6 +34,37 @@ struct GeoTiffInfo {
   std::array<double, 6> geotransform{};  ///< GDAL order: E0, dE/dcol, 0, N0, 0, dN/drow (< 0)
   std::size_t valid_cells = 0;           ///< pixels with data (the published cells)
 };
+
+/// A north-up raster's place: its size, geotransform (GDAL order) and CRS (WKT; empty: none),
+/// and dataset metadata items.
+struct RasterFrame {
+  int width = 0;
+  int height = 0;
+  std::array<double, 6> geotransform{};
+  std::string wkt;
+  std::vector<std::pair<std::string, std::string>> metadata;
+};
+
+/// One Float32 band: its cells (row-major, row 0 north, NaN = no data), description and unit.
+struct RasterBand {
+  const std::vector<float>* data = nullptr;
+  std::string name;
+  std::string unit;
+};
+
+/// Writes `bands` as a Cloud-Optimized GeoTIFF (Float32, nodata NaN, DEFLATE with the
+/// floating-point predictor, overviews per `options`) to `path` atomically; valid_cells counts
+/// the first band's cells with data.
+/// @throw std::invalid_argument if there is no band or a band's size is not width × height.
+/// @throw IoError naming `path` if GDAL cannot write it or the rename fails.
+GeoTiffInfo WriteFloatGeoTiff(const std::filesystem::path& path, const RasterFrame& frame,
+                              const std::vector<RasterBand>& bands,
+                              const GeoTiffOptions& options = {});
+
+/// dem.tif's frame for the map's layers: the geotransform from `georef`, its CRS, the datum.
+/// @throw std::invalid_argument if the layers' grid rotation differs from
+///        georef.convergence_rad() (the grid would not be north-up).
+RasterFrame DemRasterFrame(const DemLayers& layers, const Georeference& georef);
 
 /// Writes `map` as dem.tif to `path` atomically: its published cells (ElevationMap::Published;
 /// the others are NaN with count 0). The raster covers the map's cell bounds; an empty map gives

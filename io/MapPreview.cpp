@@ -6,7 +6,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/FileUtil.hpp"
@@ -128,15 +130,43 @@ ColourRange ColourRangeOf(const cv::Mat& height, double colour_quantile) {
   return range;
 }
 
-// The colour map of the heights, shaded by a sun (Horn-like central differences); white where
-// no cell.
+// How much sunlight each pixel takes (Horn-like central differences), blended with
+// `hillshade_weight`: 1 in full sun; NaN where no cell (CV_64F).
+cv::Mat ShadeFactor(const cv::Mat& height, double pixel_m, const MapPreviewOptions& options) {
+  const int h = height.rows, w = height.cols;
+  const double az = options.sun_azimuth_deg * M_PI / 180.0;
+  const double el = options.sun_elevation_deg * M_PI / 180.0;
+  const Eigen::Vector3d sun(std::sin(az) * std::cos(el), std::cos(az) * std::cos(el), std::sin(el));
+  const auto at = [&](int r, int c, float fallback) {
+    if (r < 0 || c < 0 || r >= h || c >= w) return fallback;
+    const float z = height.at<float>(r, c);
+    return std::isnan(z) ? fallback : z;
+  };
+  cv::Mat factor(h, w, CV_64F, cv::Scalar(std::numeric_limits<double>::quiet_NaN()));
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const float z = height.at<float>(r, c);
+      if (std::isnan(z)) continue;
+      const double dzdx = (at(r, c + 1, z) - at(r, c - 1, z)) / (2.0 * pixel_m);
+      const double dzdy = (at(r - 1, c, z) - at(r + 1, c, z)) / (2.0 * pixel_m);  // row 0 north
+      const Eigen::Vector3d normal = Eigen::Vector3d(-dzdx, -dzdy, 1.0).normalized();
+      const double shade = std::max(0.0, normal.dot(sun));
+      factor.at<double>(r, c) = (1.0 - options.hillshade_weight) + options.hillshade_weight * shade;
+    }
+  }
+  return factor;
+}
+
+cv::Vec3b Shaded(const cv::Vec3b& in, double f) {
+  return cv::Vec3b(cv::saturate_cast<uchar>(in[0] * f), cv::saturate_cast<uchar>(in[1] * f),
+                   cv::saturate_cast<uchar>(in[2] * f));
+}
+
+// The colour map of the heights, shaded by a sun; white where no cell.
 cv::Mat ShadedRelief(const cv::Mat& height, const ColourRange& range, double pixel_m,
                      const MapPreviewOptions& options) {
   const int h = height.rows, w = height.cols;
   const float z_min = range.z_min, z_max = range.z_max;
-  const double az = options.sun_azimuth_deg * M_PI / 180.0;
-  const double el = options.sun_elevation_deg * M_PI / 180.0;
-  const Eigen::Vector3d sun(std::sin(az) * std::cos(el), std::cos(az) * std::cos(el), std::sin(el));
   cv::Mat normalized(h, w, CV_8U);
   for (int r = 0; r < h; ++r) {
     for (int c = 0; c < w; ++c) {
@@ -149,25 +179,12 @@ cv::Mat ShadedRelief(const cv::Mat& height, const ColourRange& range, double pix
   }
   cv::Mat colour;
   cv::applyColorMap(normalized, colour, cv::COLORMAP_TURBO);
-  const auto at = [&](int r, int c, float fallback) {
-    if (r < 0 || c < 0 || r >= h || c >= w) return fallback;
-    const float z = height.at<float>(r, c);
-    return std::isnan(z) ? fallback : z;
-  };
+  const cv::Mat shade = ShadeFactor(height, pixel_m, options);
   cv::Mat map_image(h, w, CV_8UC3, kBackground);
   for (int r = 0; r < h; ++r) {
     for (int c = 0; c < w; ++c) {
-      const float z = height.at<float>(r, c);
-      if (std::isnan(z)) continue;
-      const double dzdx = (at(r, c + 1, z) - at(r, c - 1, z)) / (2.0 * pixel_m);
-      const double dzdy = (at(r - 1, c, z) - at(r + 1, c, z)) / (2.0 * pixel_m);  // row 0 north
-      const Eigen::Vector3d normal = Eigen::Vector3d(-dzdx, -dzdy, 1.0).normalized();
-      const double shade = std::max(0.0, normal.dot(sun));
-      const double f = (1.0 - options.hillshade_weight) + options.hillshade_weight * shade;
-      const cv::Vec3b in = colour.at<cv::Vec3b>(r, c);
-      map_image.at<cv::Vec3b>(r, c) =
-          cv::Vec3b(cv::saturate_cast<uchar>(in[0] * f), cv::saturate_cast<uchar>(in[1] * f),
-                    cv::saturate_cast<uchar>(in[2] * f));
+      const double f = shade.at<double>(r, c);
+      if (!std::isnan(f)) map_image.at<cv::Vec3b>(r, c) = Shaded(colour.at<cv::Vec3b>(r, c), f);
     }
   }
   return map_image;
@@ -292,6 +309,75 @@ void DrawScaleBarAndLegend(cv::Mat* canvas, const CanvasLayout& l, double px_per
   }
 }
 
+// terrain.png's classes, worst first: a pixel of several cells shows the worst of them.
+constexpr float kRankHazard = -2.0f;
+constexpr float kRankUncertain = -1.0f;
+const cv::Vec3b kHazardColour(0, 0, 140);        // dark red (BGR)
+const cv::Vec3b kUncertainColour(200, 60, 200);  // purple
+const cv::Vec3b kUnknownColour(215, 215, 215);   // grey: heights, but no layers
+
+// Red (barely passable) through yellow to green (benign), for traversability in (0, 1].
+cv::Vec3b TraversabilityColour(float t) {
+  const float c = std::clamp(t, 0.0f, 1.0f);
+  const auto red = static_cast<uchar>(c < 0.5f ? 255.0f : 255.0f * (1.0f - c) * 2.0f);
+  const auto green = static_cast<uchar>(c < 0.5f ? 255.0f * c * 2.0f : 255.0f);
+  return cv::Vec3b(0, green, red);
+}
+
+// The traversability bar and the classes' swatches right of the map.
+void DrawTraversabilityBar(cv::Mat* canvas, const CanvasLayout& l) {
+  const int bar_x = l.bar_x, bar_top = l.bar_top, bar_h = l.bar_h, bar_w = l.bar_w;
+  for (int i = 0; i < bar_h; ++i) {
+    const float t = 1.0f - static_cast<float>(i) / static_cast<float>(std::max(1, bar_h - 1));
+    cv::line(*canvas, {bar_x, bar_top + i}, {bar_x + bar_w, bar_top + i},
+             cv::Scalar(TraversabilityColour(std::max(t, 0.01f))), 1);
+  }
+  for (double v : {0.0, 0.5, 1.0}) {
+    const int y = bar_top + static_cast<int>((1.0 - v) * (bar_h - 1));
+    cv::line(*canvas, {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, kText, 1);
+    cv::putText(*canvas, TickLabel(v, 0.5), {bar_x + bar_w + 8, y + 5}, cv::FONT_HERSHEY_SIMPLEX,
+                0.45, kText, 1, cv::LINE_AA);
+  }
+  int y = bar_top + bar_h + 12;
+  for (const auto& [label, colour] :
+       {std::pair{"hazard", kHazardColour}, std::pair{"uncertain", kUncertainColour},
+        std::pair{"unknown", kUnknownColour}}) {
+    cv::rectangle(*canvas, cv::Rect(bar_x, y, 12, 12), cv::Scalar(colour), cv::FILLED);
+    cv::rectangle(*canvas, cv::Rect(bar_x, y, 12, 12), kText, 1);
+    cv::putText(*canvas, label, {bar_x + 16, y + 11}, cv::FONT_HERSHEY_SIMPLEX, 0.4, kText, 1,
+                cv::LINE_AA);
+    y += 18;
+  }
+}
+
+// The map drawn, framed and annotated on a canvas (the bar's side left to `draw_bar`), written.
+template <typename DrawBar>
+void ComposeAndWrite(const std::filesystem::path& path, cv::Mat map_image, const DemLayers& layers,
+                     const PreviewGrid& grid, double pixel_m,
+                     const std::vector<PreviewTrajectory>& trajectories, DrawBar draw_bar,
+                     int extra_bar_rows) {
+  // Upscale small maps so the annotations stay legible.
+  const int zoom = std::max(1, 600 / std::max(grid.height.cols, grid.height.rows));
+  if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
+  const std::vector<LegendLine> legend =
+      DrawTrajectories(&map_image, layers, grid, zoom, trajectories);
+  CanvasLayout layout = LayOut(map_image, legend.size());
+  layout.rows = std::max(layout.rows, layout.bar_h + extra_bar_rows + 2 * kMargin + layout.bottom);
+  cv::Mat canvas(layout.rows, layout.cols, CV_8UC3, kBackground);
+  map_image.copyTo(canvas(cv::Rect(kMargin, kMargin, map_image.cols, map_image.rows)));
+  cv::rectangle(canvas, cv::Rect(kMargin - 1, kMargin - 1, map_image.cols + 2, map_image.rows + 2),
+                kText, 1);
+  draw_bar(&canvas, layout);
+  DrawScaleBarAndLegend(&canvas, layout, zoom / pixel_m, legend);
+  EncodeAndWrite(path, canvas);
+}
+
+void WriteNoData(const std::filesystem::path& path) {
+  cv::Mat image(120, 320, CV_8UC3, kBackground);
+  cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
+  EncodeAndWrite(path, image);
+}
+
 }  // namespace
 
 void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap& map,
@@ -317,31 +403,58 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
 void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                      const std::vector<PreviewTrajectory>& trajectories,
                      const MapPreviewOptions& options) {
-  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) {
-    cv::Mat image(120, 320, CV_8UC3, kBackground);
-    cv::putText(image, "no data", {110, 65}, cv::FONT_HERSHEY_SIMPLEX, 0.8, kText, 2);
-    return EncodeAndWrite(path, image);
-  }
+  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) return WriteNoData(path);
   PreviewGrid grid = PreviewBounds(layers, trajectories, options.max_map_px);
   Rasterise(layers, &grid);
   const ColourRange colours = ColourRangeOf(grid.height, options.colour_quantile);
   const double pixel_m = layers.cell_size_m * static_cast<double>(grid.step);
-  cv::Mat map_image = ShadedRelief(grid.height, colours, pixel_m, options);
+  ComposeAndWrite(
+      path, ShadedRelief(grid.height, colours, pixel_m, options), layers, grid, pixel_m,
+      trajectories,
+      [&colours](cv::Mat* canvas, const CanvasLayout& l) { DrawColourBar(canvas, l, colours); }, 0);
+}
 
-  // Upscale small maps so the annotations stay legible.
-  const int zoom = std::max(1, 600 / std::max(grid.height.cols, grid.height.rows));
-  if (zoom > 1) cv::resize(map_image, map_image, {}, zoom, zoom, cv::INTER_NEAREST);
-  const std::vector<LegendLine> legend =
-      DrawTrajectories(&map_image, layers, grid, zoom, trajectories);
-
-  const CanvasLayout layout = LayOut(map_image, legend.size());
-  cv::Mat canvas(layout.rows, layout.cols, CV_8UC3, kBackground);
-  map_image.copyTo(canvas(cv::Rect(kMargin, kMargin, map_image.cols, map_image.rows)));
-  cv::rectangle(canvas, cv::Rect(kMargin - 1, kMargin - 1, map_image.cols + 2, map_image.rows + 2),
-                kText, 1);
-  DrawColourBar(&canvas, layout, colours);
-  DrawScaleBarAndLegend(&canvas, layout, zoom / pixel_m, legend);
-  EncodeAndWrite(path, canvas);
+void WriteTerrainPreview(const std::filesystem::path& path, const DemLayers& layers,
+                         const terrain::TerrainLayers& terrain,
+                         const std::vector<PreviewTrajectory>& trajectories,
+                         const MapPreviewOptions& options) {
+  if (terrain.width != layers.width || terrain.height != layers.height ||
+      terrain.traversability.size() != layers.elevation_m.size()) {
+    throw std::invalid_argument("WriteTerrainPreview: the layers are not on the DEM's grid");
+  }
+  if (layers.valid_cells == 0 || !(layers.cell_size_m > 0.0)) return WriteNoData(path);
+  PreviewGrid grid = PreviewBounds(layers, trajectories, options.max_map_px);
+  Rasterise(layers, &grid);
+  // Each pixel shows the worst class of its cells: hazard, uncertain, then the lowest
+  // traversability.
+  cv::Mat rank(grid.height.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (int r = 0; r < layers.height; ++r) {
+    const int row = static_cast<int>((grid.hi.y - (layers.max.y - r)) / grid.step);
+    for (int c = 0; c < layers.width; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * layers.width + c;
+      const float t = terrain.traversability[i];
+      if (std::isnan(t)) continue;
+      const float value = terrain.uncertain[i] > 0.0f ? kRankUncertain : t > 0.0f ? t : kRankHazard;
+      float& px = rank.at<float>(row, static_cast<int>((layers.min.x + c - grid.lo.x) / grid.step));
+      px = std::isnan(px) ? value : std::min(px, value);
+    }
+  }
+  const double pixel_m = layers.cell_size_m * static_cast<double>(grid.step);
+  const cv::Mat shade = ShadeFactor(grid.height, pixel_m, options);
+  cv::Mat map_image(grid.height.size(), CV_8UC3, kBackground);
+  for (int r = 0; r < map_image.rows; ++r) {
+    for (int c = 0; c < map_image.cols; ++c) {
+      const double f = shade.at<double>(r, c);
+      const float v = rank.at<float>(r, c);
+      if (std::isnan(f)) continue;
+      const cv::Vec3b colour = std::isnan(v)         ? kUnknownColour
+                               : v == kRankHazard    ? kHazardColour
+                               : v == kRankUncertain ? kUncertainColour
+                                                     : TraversabilityColour(v);
+      map_image.at<cv::Vec3b>(r, c) = Shaded(colour, f);
+    }
+  }
+  ComposeAndWrite(path, map_image, layers, grid, pixel_m, trajectories, DrawTraversabilityBar, 70);
 }
 
 }  // namespace rovermap::io

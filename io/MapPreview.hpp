@@ -11,6 +11,7 @@
 
 #include "dem/ElevationMap.hpp"
 #include "io/DemLayers.hpp"
+#include "terrain/TerrainLayers.hpp"
 
 namespace rovermap::io {
 
@@ -48,6 +49,16 @@ void WriteDemPreview(const std::filesystem::path& path, const dem::ElevationMap&
 void WriteDemPreview(const std::filesystem::path& path, const DemLayers& layers,
                      const std::vector<PreviewTrajectory>& trajectories,
                      const MapPreviewOptions& options = {});
+
+/// terrain.png: `terrain`'s traversability (red to green), its hazard, uncertain and unknown
+/// cells, shaded by `layers`' relief, with `trajectories`, written to `path` atomically. Each
+/// pixel of a decimated map shows the worst of its cells.
+/// @throw std::invalid_argument if `terrain` is not on `layers`' grid.
+/// @throw IoError naming `path` if encoding or writing fails.
+void WriteTerrainPreview(const std::filesystem::path& path, const DemLayers& layers,
+                         const terrain::TerrainLayers& terrain,
+                         const std::vector<PreviewTrajectory>& trajectories,
+                         const MapPreviewOptions& options = {});
 
 /// Renders `map`'s published cells (ElevationMap::Published) and writes it to `path` (PNG)
 /// atomically. `trajectory_world` (world x, y [m]; z ignored) is drawn in white with a black

@@ -29,16 +29,19 @@
 #include "mapper/PoseChain.hpp"
 #include "registration/Icp.hpp"
 #include "stereo/StereoOptions.hpp"
+#include "terrain/TerrainOptions.hpp"
 
 namespace rovermap::mapper {
 
-/// Every option the pipeline reads (config sections mapper, registration, stereo, dem, octomap).
+/// Every option the pipeline reads (config sections mapper, registration, stereo, dem, octomap,
+/// terrain).
 struct PipelineOptions {
   MapperOptions mapper;
   registration::RegistrationOptions registration;
   stereo::StereoOptions stereo;
   dem::ElevationMapOptions dem;
   dem::OctoMapOptions octomap;
+  terrain::TerrainOptions terrain;  ///< the layers written with the DEM (service/Outputs)
 };
 
 /// Wall time of each stage of one frame [ms]. `load_ms` (reading files) is filled by whoever

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's pictures: runs the demo (scripts/demo.sh: a simulated traverse replayed through
-# the mapper) into a scratch folder and copies its dem.png and drift.png to docs/img/, their
+# the mapper) into a scratch folder and copies its dem.png, drift.png and terrain.png to docs/img/, their
 # image data deflated again at the highest level (the same pixels, about half the bytes).
 #
 #   scripts/make_doc_images.sh BUILD/apps/rovermap
@@ -13,7 +13,7 @@ trap 'rm -rf "$scratch"' EXIT
 bash "$root/scripts/demo.sh" "$bin" "$scratch/demo" > "$scratch/demo.log" 2>&1 ||
   { cat "$scratch/demo.log" >&2; exit 1; }
 mkdir -p "$root/docs/img"
-for name in dem drift; do
+for name in dem drift terrain; do
   python3 - "$scratch/demo/replay/$name.png" "$root/docs/img/$name.png" <<'EOF'
 import struct, sys, zlib
 data = open(sys.argv[1], "rb").read()

@@ -11,6 +11,7 @@ OutputState::OutputState(const Mapper& mapper)
   write_ot = mapper.options().octomap.write_ot;
   octomap = mapper.OctoMapBytes(write_ot);
   octomap_resolution_m = mapper.options().octomap.resolution_m;
+  terrain = mapper.options().terrain;
   if (const PoseChain* chain = mapper.chain()) {
     distance_m = chain->path_length_m();
     final_correction = chain->back().cumulative_correction;

@@ -35,6 +35,7 @@ struct OutputState {
   double distance_m = 0.0;  ///< path length of the registered chain
   Eigen::Isometry3d final_correction = Eigen::Isometry3d::Identity();
   std::optional<int> stereo_num_disparities;  ///< stereo sequences only
+  terrain::TerrainOptions terrain;            ///< terrain.tif and terrain.png
 };
 
 }  // namespace rovermap::mapper

@@ -9,9 +9,50 @@
 #include "io/GeoTiff.hpp"
 #include "io/MapPreview.hpp"
 #include "io/OctoMapIo.hpp"
+#include "io/TerrainOutputs.hpp"
 #include "io/Tum.hpp"
+#include "terrain/TerrainLayers.hpp"
 
 namespace rovermap::mapper {
+namespace {
+
+// terrain.tif and terrain.png from the DEM's layers (docs/terrain.md); what summary.json says of
+// them. A DEM smaller than the footprint (the first frames) gets none, and says why.
+nlohmann::json WriteTerrain(const std::filesystem::path& out_dir, const OutputState& state,
+                            const std::vector<io::PreviewTrajectory>& drawn,
+                            const std::function<void(const char*)>& done) {
+  nlohmann::json j;
+  j["enabled"] = state.terrain.enabled;
+  if (!state.terrain.enabled) return j;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    const terrain::TerrainLayers layers =
+        terrain::ComputeTerrain(io::GridViewOf(state.dem), state.terrain);
+    io::WriteTerrainGeoTiff(out_dir / "terrain.tif",
+                            io::DemRasterFrame(state.dem, state.georeference), layers,
+                            state.terrain);
+    done("terrain.tif");
+    io::WriteTerrainPreview(out_dir / "terrain.png", state.dem, layers, drawn);
+    done("terrain.png");
+    j["written"] = true;
+    j["known_cells"] = layers.known;
+    j["hazard_cells"] = layers.hazard;
+    j["uncertain_cells"] = layers.uncertain_cells;
+    j["benign_cells"] = layers.benign;
+    j["footprint_cells"] = {layers.footprint_cols, layers.footprint_rows};
+  } catch (const terrain::TerrainError& e) {
+    // Not an error of the run: the map is not yet as large as the rover. No stale layers stay.
+    std::error_code ignored;
+    std::filesystem::remove(out_dir / "terrain.tif", ignored);
+    std::filesystem::remove(out_dir / "terrain.png", ignored);
+    j["written"] = false;
+    j["reason"] = e.what();
+  }
+  j["time_ms"] = core::MsSince(start);
+  return j;
+}
+
+}  // namespace
 
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
                             const eval::EvalOptions& eval_options,
@@ -63,13 +104,15 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   }
   io::WriteDemPreview(out_dir / "dem.png", state.dem, drawn);
   done("dem.png");
+  nlohmann::json terrain = WriteTerrain(out_dir, state, drawn, done);
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
   WriteDriftPlot(out_dir / "drift.png", results, drift);
   done("drift.png");
 
   run.write_ms = core::MsSince(start);
   if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
-  const nlohmann::json summary = Summary(state, run, drift);
+  nlohmann::json summary = Summary(state, run, drift);
+  summary["terrain"] = std::move(terrain);
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
   done("summary.json");
   return summary;

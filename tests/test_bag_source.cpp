@@ -172,7 +172,7 @@ TEST(BagSource, PointCloud2OfFloat32AndFloat64GivesThePointsNaNsIncluded) {
 // The registered trajectory of `source` through mapper::ReadAhead, as replay runs it.
 std::vector<Eigen::Isometry3d> Replay(FrameSource* source) {
   const config::Config c;
-  mapper::Mapper m(source->info(), {c.mapper, c.registration, c.stereo, c.dem, c.octomap});
+  mapper::Mapper m(source->info(), {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
   mapper::ReadAhead ahead(source, &m);
   mapper::ReadAhead::Item item;
   while (ahead.Next(&item)) {

@@ -27,7 +27,7 @@ const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud"; 
 
 mapper::PipelineOptions Defaults() {
   const config::Config c;
-  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain};
 }
 
 class CheckpointTest : public ::testing::Test {

@@ -11,11 +11,14 @@
 
 #include "config/Config.hpp"
 #include "eval/TrajectoryMetrics.hpp"
+#include "io/DemLayers.hpp"
 #include "io/Sequence.hpp"
+#include "io/TerrainOutputs.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/Mapper.hpp"
 #include "service/DriftReport.hpp"
 #include "sim/Simulator.hpp"
+#include "terrain/TerrainLayers.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
@@ -25,7 +28,7 @@ namespace {
 
 mapper::PipelineOptions Defaults() {
   const config::Config c;
-  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain};
 }
 
 struct Replayed {
@@ -82,6 +85,47 @@ DemErrors Compare(const dem::ElevationMap& map, F&& truth) {
   return e;
 }
 
+// The terrain layers of the map against those of the true terrain on the same cells (its heights
+// at every cell's centre, 1 mm σ), with the default footprint and limits (docs/terrain.md),
+// over the cells where the map's layers are known.
+struct HazardAgreement {
+  std::size_t true_hazard = 0;      ///< the truth's traversability 0
+  std::size_t found = 0;            ///< of those, the map's 0 too (hazard or uncertain)
+  std::size_t true_benign = 0;      ///< the truth's traversability > 0
+  std::size_t false_hazard = 0;     ///< of those, the map's a hazard beyond doubt
+  std::size_t false_uncertain = 0;  ///< of those, the map's uncertain
+};
+
+template <typename F>
+HazardAgreement CompareTerrain(const dem::ElevationMap& map, F&& truth) {
+  const io::DemLayers dem = io::RasteriseDem(map);
+  const terrain::TerrainOptions options;
+  const terrain::TerrainLayers got = terrain::ComputeTerrain(io::GridViewOf(dem), options);
+  std::vector<float> z(dem.elevation_m.size()), sigma(z.size(), 0.001f);
+  for (int r = 0; r < dem.height; ++r) {
+    for (int c = 0; c < dem.width; ++c) {
+      const dem::CellIndex cell{dem.min.x + c, dem.max.y - r};
+      const Eigen::Vector2d p = map.CellCenterWorld(cell);
+      z[static_cast<std::size_t>(r) * dem.width + c] = static_cast<float>(truth(p.x(), p.y()));
+    }
+  }
+  const terrain::TerrainLayers want = terrain::ComputeTerrain(
+      {dem.width, dem.height, dem.cell_size_m, dem.cell_size_m, z.data(), sigma.data()}, options);
+  HazardAgreement a;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    if (std::isnan(got.traversability[i]) || std::isnan(want.traversability[i])) continue;
+    if (want.traversability[i] == 0.0f) {
+      ++a.true_hazard;
+      a.found += got.traversability[i] == 0.0f;
+    } else {
+      ++a.true_benign;
+      a.false_hazard += got.traversability[i] == 0.0f && got.uncertain[i] == 0.0f;
+      a.false_uncertain += got.uncertain[i] > 0.0f;
+    }
+  }
+  return a;
+}
+
 // Writes a simulated sequence into a scratch directory.
 fs::path Simulate(const sim::SimOptions& o, const std::string& name, sim::Simulator** keep) {
   const fs::path dir = rovermap::testing::ScratchDir() / name;
@@ -99,6 +143,7 @@ fs::path Simulate(const sim::SimOptions& o, const std::string& name, sim::Simula
 struct Traverse {
   double drift_ratio = 0.0;  ///< registered ATE origin / dead reckoning's
   DemErrors dem;
+  HazardAgreement terrain;
   std::size_t ran_to_max_iterations = 0;  ///< frames whose matcher never stopped
 };
 
@@ -113,12 +158,27 @@ Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
     t.ran_to_max_iterations += r.matcher_status == "max_iterations";
   t.dem = Compare(run.mapper->elevation_map(),
                   [&](double x, double y) { return simulator->terrain().Height(x, y); });
+  t.terrain = CompareTerrain(run.mapper->elevation_map(),
+                             [&](double x, double y) { return simulator->terrain().Height(x, y); });
   std::printf(
       "%s: ATE origin registered %.4f m, dead reckoning %.4f m; DEM %zu cells, RMSE %.4f m, "
-      "p95 %.4f m, %zu off by 0.2 m, within 2 sigma %.3f\n",
+      "p95 %.4f m, %zu off by 0.2 m, within 2 sigma %.3f; terrain: %zu of %zu true hazard cells "
+      "found, of %zu benign %zu marked hazard and %zu uncertain\n",
       name.c_str(), reg.ate_origin_m.rmse, odo.ate_origin_m.rmse, t.dem.cells, t.dem.rmse_m,
-      t.dem.p95_m, t.dem.off_20cm, t.dem.within_2sigma);
+      t.dem.p95_m, t.dem.off_20cm, t.dem.within_2sigma, t.terrain.found, t.terrain.true_hazard,
+      t.terrain.true_benign, t.terrain.false_hazard, t.terrain.false_uncertain);
   return t;
+}
+
+// The terrain layers of the replayed DEM find the true terrain's hazards (slopes, rocks and
+// crater rims beyond the default limits) and call no benign ground a sure hazard. Measured:
+// cloud 5258 of 5314 found, of 6294 benign none marked hazard, 1417 uncertain; stereo 3073 of
+// 3114, of 5333 none, 1610 uncertain.
+void ExpectHazardsFound(const HazardAgreement& a) {
+  ASSERT_GT(a.true_hazard, 1000u);
+  ASSERT_GT(a.true_benign, 1000u);
+  EXPECT_GE(static_cast<double>(a.found), 0.9 * static_cast<double>(a.true_hazard));
+  EXPECT_LE(static_cast<double>(a.false_hazard), 0.05 * static_cast<double>(a.true_benign));
 }
 
 TEST(Mapper, SimulatedCloudTraverse) {
@@ -147,6 +207,7 @@ TEST(Mapper, SimulatedCloudTraverse) {
   // means between 0.9 and 0.99, not merely high.
   EXPECT_GT(t.dem.within_2sigma, 0.9);
   EXPECT_LT(t.dem.within_2sigma, 0.99);
+  ExpectHazardsFound(t.terrain);
 }
 
 TEST(Mapper, SimulatedStereoTraverse) {
@@ -172,6 +233,7 @@ TEST(Mapper, SimulatedStereoTraverse) {
   // (0.885 at 10 without the sharing: the pose's σ shrank, and averaging hid the rest).
   EXPECT_GT(t.dem.within_2sigma, 0.9);
   EXPECT_LT(t.dem.within_2sigma, 0.99);
+  ExpectHazardsFound(t.terrain);
 }
 
 TEST(Mapper, KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat) {

@@ -38,7 +38,7 @@ std::unique_ptr<mapper::Mapper> MapperAfter(std::size_t frames) {
   const config::Config c;
   io::SequenceReader reader(kTinyCloud);
   auto m = std::make_unique<mapper::Mapper>(
-      reader.info(), mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap});
+      reader.info(), mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
   io::Frame frame;
   for (std::size_t k = 0; k < frames && reader.Next(&frame); ++k) m->ProcessFrame(frame);
   return m;

@@ -189,7 +189,7 @@ std::vector<std::string> Temporaries(const fs::path& dir) {
 
 mapper::PipelineOptions Defaults() {
   const config::Config c;
-  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain};
 }
 
 // A Mapper after the first `frames` frames of the tiny cloud sequence.

@@ -78,7 +78,8 @@ MapperHandle MakeMapper(py::handle sequence, py::handle sensor, py::handle camer
   const config::Config& c = h.cfg;
   try {
     h.mapper = std::make_unique<mapper::Mapper>(
-        info, mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap});
+        info, mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap,
+                                      c.terrain});
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());  // an option the key checks let through
   }

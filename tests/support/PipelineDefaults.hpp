@@ -8,7 +8,7 @@ namespace rovermap::testing {
 
 inline mapper::PipelineOptions PipelineDefaults() {
   const config::Config c;
-  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap};
+  return {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain};
 }
 
 /// The same without the OctoMap, for tests that compare trajectories or the DEM only.
