@@ -1,6 +1,7 @@
 // Benchmarks of the map products: DEM fusion throughput (points/s, one core), OctoMap insertion per
 // stereo-sized frame at 0.1 and 0.05 m, GeoTIFF write of a 2000×2000 map, and memory and per-frame
-// cost over a long synthetic traverse.
+// cost over a long synthetic traverse, and the terrain layers (terrain/) per megacell against
+// plain per-cell loops.
 //   build/bench/bench_maps [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>
@@ -23,6 +24,7 @@
 #include "dem/QuietStderr.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
+#include "terrain/TerrainLayers.hpp"
 
 namespace {
 
@@ -278,6 +280,83 @@ void BM_LongTraverse(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_LongTraverse)->Arg(2000)->ArgName("frames")->Unit(benchmark::kSecond)->Iterations(1);
+
+// A DEM of `side` × `side` 5 cm cells on the synthetic terrain, 2 cm σ, 5 % of cells empty.
+struct TerrainGrid {
+  int side = 0;
+  std::vector<float> z, sigma;
+  explicit TerrainGrid(int n) : side(n) {
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < n; ++c) {
+        z.push_back(u(rng) < 0.05 ? NAN : static_cast<float>(Terrain(0.05 * c, -0.05 * r)));
+        sigma.push_back(0.02f);
+      }
+    }
+  }
+  terrain::GridView View() const { return {side, side, 0.05, 0.05, z.data(), sigma.data()}; }
+};
+
+// The layers with the defaults (0.6 m footprint: 13 × 13 cells) and a 1.05 m one (21 × 21), on
+// a 2000 × 2000 DEM (4 megacells, a 100 m square of 5 cm cells), all cores.
+void BM_TerrainLayers(benchmark::State& state) {
+  const TerrainGrid grid(2000);
+  terrain::TerrainOptions options;
+  options.footprint_m = 0.05 * static_cast<double>(state.range(0));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(terrain::ComputeTerrain(grid.View(), options).known);
+  state.counters["megacells_per_s"] =
+      benchmark::Counter(4.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TerrainLayers)
+    ->Arg(13)
+    ->Arg(21)
+    ->ArgName("footprint_cells")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The same plane fit and step written the obvious way (grid_map's filters loop so): every
+// cell gathers its footprint and solves its 3 × 3 normal equations; one core, 500 × 500 cells.
+void BM_TerrainPlainLoops(benchmark::State& state) {
+  const TerrainGrid grid(500);
+  const int h = static_cast<int>(state.range(0)) / 2, n = grid.side;
+  std::vector<float> slope(grid.z.size()), step(grid.z.size());
+  for (auto _ : state) {
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < n; ++c) {
+        Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+        float lo = INFINITY, hi = -INFINITY;
+        for (int i = std::max(0, r - h); i <= std::min(n - 1, r + h); ++i) {
+          for (int j = std::max(0, c - h); j <= std::min(n - 1, c + h); ++j) {
+            const float zz = grid.z[static_cast<std::size_t>(i) * n + j];
+            if (std::isnan(zz)) continue;
+            const double s = grid.sigma[static_cast<std::size_t>(i) * n + j];
+            const Eigen::Vector3d a(1.0, 0.05 * (j - c), 0.05 * (i - r));
+            normal += a * a.transpose() / (s * s);
+            rhs += a * zz / (s * s);
+            lo = std::min(lo, zz);
+            hi = std::max(hi, zz);
+          }
+        }
+        const Eigen::Vector3d beta = normal.ldlt().solve(rhs);
+        slope[static_cast<std::size_t>(r) * n + c] = static_cast<float>(beta.tail<2>().norm());
+        step[static_cast<std::size_t>(r) * n + c] = hi - lo;
+      }
+    }
+    benchmark::DoNotOptimize(slope.data());
+    benchmark::DoNotOptimize(step.data());
+  }
+  state.counters["megacells_per_s"] =
+      benchmark::Counter(0.25, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TerrainPlainLoops)
+    ->Arg(13)
+    ->Arg(21)
+    ->ArgName("footprint_cells")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

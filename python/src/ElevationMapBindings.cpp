@@ -7,9 +7,11 @@
 
 #include "io/DemLayers.hpp"
 #include "io/GeoTiff.hpp"
+#include "io/TerrainOutputs.hpp"
 #include "python/src/Bindings.hpp"
 #include "python/src/Convert.hpp"
 #include "python/src/Handles.hpp"
+#include "terrain/TerrainLayers.hpp"
 
 namespace rovermap::python {
 namespace {
@@ -104,6 +106,31 @@ py::dict Layers(const ElevationMapHandle& handle) {
   return d;
 }
 
+// The terrain layers of the published cells (docs/terrain.md), on to_numpy's grid.
+py::dict Terrain(const ElevationMapHandle& handle, py::handle config, const py::kwargs& overrides) {
+  const config::Config cfg = ConfigFrom(config, overrides, "terrain");
+  const io::DemLayers layers = io::RasteriseDem(handle.Map());
+  terrain::TerrainLayers t;
+  {
+    py::gil_scoped_release release;
+    t = terrain::ComputeTerrain(io::GridViewOf(layers), cfg.terrain);
+  }
+  const std::vector<py::ssize_t> shape = {t.height, t.width};
+  py::dict d;
+  d["slope_deg"] = Adopt(std::move(t.slope_deg), shape);
+  d["slope_stddev_deg"] = Adopt(std::move(t.slope_sigma_deg), shape);
+  d["roughness_m"] = Adopt(std::move(t.roughness_m), shape);
+  d["step_m"] = Adopt(std::move(t.step_m), shape);
+  d["traversability"] = Adopt(std::move(t.traversability), shape);
+  d["uncertain"] = Adopt(std::move(t.uncertain), shape);
+  d["known_cells"] = t.known;
+  d["hazard_cells"] = t.hazard;
+  d["uncertain_cells"] = t.uncertain_cells;
+  d["benign_cells"] = t.benign;
+  d["footprint_cells"] = py::make_tuple(t.footprint_cols, t.footprint_rows);
+  return d;
+}
+
 }  // namespace
 
 ElevationMapHandle::ElevationMapHandle(const dem::ElevationMapOptions& options,
@@ -170,6 +197,14 @@ rz tx ty tz): the pose's uncertainty; normals: (N, 3). Returns what happened to 
 with elevation, stddev, count (row 0 north, NaN / 0 where not published), cell_size [m], extent
 (x_min, x_max, y_min, y_max of the cell edges in the grid frame [m]), grid_rotation [rad] and
 valid_cells. The arrays own their memory (no copy is made beyond the rasterisation).)")
+      .def("terrain", &Terrain, py::arg("config") = py::none(),
+           R"(The terrain layers a planner reads (docs/terrain.md), on to_numpy's grid: a dict
+with slope_deg, slope_stddev_deg, roughness_m, step_m, traversability (0 hazard .. 1 benign),
+uncertain (1 where a limit lies within terrain.uncertainty_sigmas sigma) as float32 arrays (row
+0 north, NaN where unknown), and known_cells, hazard_cells, uncertain_cells, benign_cells,
+footprint_cells. config: a YAML file; **overrides: terrain keys, e.g. footprint_m=0.8,
+max_step_m=0.2. Raises ValueError for a footprint smaller than two cells or larger than the
+map.)")
       .def(
           "write_geotiff",
           [](const ElevationMapHandle& h, py::handle path) {

@@ -79,3 +79,30 @@ def test_covariances_and_bad_shapes():
         dem.fuse(points, np.zeros((2, 3, 3)))
     with pytest.raises(ValueError, match="points"):
         dem.fuse(np.zeros((4, 2)))
+
+
+def test_terrain_layers_of_a_ramp_with_a_box():
+    # A 10° ramp (40 × 40 cells of 5 cm) and a 0.25 m box on it: the box is a hazard, the ramp
+    # away from it benign, with the ramp's slope.
+    dem = rovermap.ElevationMap(cell_size_m=0.05)
+    slope = np.tan(np.radians(10.0))
+    for frame in range(3):
+        points = plane_points(0.0, frame)
+        points[:, 2] = slope * points[:, 0]
+        box = (points[:, 0] > 1.4) & (points[:, 0] < 1.7) & (points[:, 1] > 0.8) & (points[:, 1] < 1.1)
+        points[box, 2] += 0.25
+        dem.fuse(points, frame=frame)
+    layers = dem.terrain(footprint_m=0.5)
+    z = dem.to_numpy()["elevation"]
+    assert layers["footprint_cells"] == (11, 11)
+    for name in ("slope_deg", "slope_stddev_deg", "roughness_m", "step_m", "traversability",
+                 "uncertain"):
+        assert layers[name].dtype == np.float32 and layers[name].shape == z.shape
+    trav = layers["traversability"]
+    assert layers["hazard_cells"] > 0 and layers["benign_cells"] > 100
+    assert (trav == 0).sum() >= layers["hazard_cells"] - layers["uncertain_cells"]
+    benign = trav > 0
+    np.testing.assert_allclose(layers["slope_deg"][benign], 10.0, atol=0.5)
+    assert np.nanmax(layers["step_m"]) > 0.25
+    with pytest.raises(ValueError, match="terrain.footprint_m"):
+        dem.terrain(footprint_m=0.05)
