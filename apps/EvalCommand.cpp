@@ -75,7 +75,7 @@ int RunTrajectories(const EvalArgs& args, const eval::EvalOptions& options) {
   return status;
 }
 
-int RunDem(const EvalArgs& args) {
+int RunDem(const EvalArgs& args, const terrain::TerrainOptions& terrain_options) {
   const io::DemRaster dem = io::ReadDemGeoTiff(args.dem);
   const io::DemRaster reference = io::ReadDemGeoTiff(args.reference);
   const eval::DemComparison comparison = eval::CompareDems(dem, reference);
@@ -86,6 +86,8 @@ int RunDem(const EvalArgs& args) {
     std::cout << out.dump(2) << "\n";
     return kExitFailure;
   }
+  // The planner's view: do both give the same hazards (docs/terrain.md)?
+  out["terrain"] = eval::ToJson(eval::CompareTerrain(comparison, terrain_options));
   if (!args.plot_dir.empty()) {
     const fs::path png = PlotDirectory(args.plot_dir) / "dem_error.png";
     eval::WriteDemErrorPlot(png, comparison);
@@ -142,7 +144,7 @@ int RunEval(const EvalArgs& args) {
   if (dems) {
     if (args.dem.empty()) throw UsageError("eval: --reference needs --dem FILE");
     if (args.reference.empty()) throw UsageError("eval: --dem needs --reference FILE");
-    return RunDem(args);
+    return RunDem(args, cfg.terrain);
   }
   throw UsageError("eval: give --estimate FILE --groundtruth FILE, or --dem FILE --reference FILE");
 }

@@ -143,6 +143,11 @@ DemComparison CompareDems(const io::DemRaster& dem, const io::DemRaster& referen
   }
   c.coverage = static_cast<double>(mapped) / static_cast<double>(reference_cells);
 
+  c.cell_x_m = std::abs(grid.geotransform[1]);
+  c.cell_y_m = std::abs(grid.geotransform[5]);
+  c.dem_m.assign(dem_value.begin(), dem_value.end());
+  c.dem_sigma_m.assign(dem_sigma.begin(), dem_sigma.end());
+  c.reference_m.assign(reference_value.begin(), reference_value.end());
   c.error_m.assign(cells, std::numeric_limits<float>::quiet_NaN());
   std::vector<double> abs_errors;
   double sum_errors = 0.0, sum_squares = 0.0;
@@ -189,6 +194,67 @@ nlohmann::json ToJson(const DemComparison& c) {
   out["sigma_cells"] = c.sigma_cells;
   out["grid"] = c.on_reference_grid ? "reference" : "dem";
   out["cell_size_m"] = c.cell_size_m;
+  return out;
+}
+
+TerrainAgreement CompareTerrain(const DemComparison& c, const terrain::TerrainOptions& options) {
+  TerrainAgreement a;
+  if (c.status != DemStatus::kOk) {
+    a.reason = "the DEMs were not compared";
+    return a;
+  }
+  // The DEM with its σ where every height has one; the reference as the truth.
+  bool dem_sigma = c.dem_m.size() == c.dem_sigma_m.size();
+  for (std::size_t k = 0; dem_sigma && k < c.dem_m.size(); ++k)
+    dem_sigma = std::isnan(c.dem_m[k]) || std::isfinite(c.dem_sigma_m[k]);
+  const std::vector<float> reference_sigma(c.reference_m.size(), 0.001f);
+  terrain::TerrainLayers got, want;
+  try {
+    got = terrain::ComputeTerrain({c.width, c.height, c.cell_x_m, c.cell_y_m, c.dem_m.data(),
+                                   dem_sigma ? c.dem_sigma_m.data() : nullptr},
+                                  options);
+    want = terrain::ComputeTerrain(
+        {c.width, c.height, c.cell_x_m, c.cell_y_m, c.reference_m.data(), reference_sigma.data()},
+        options);
+  } catch (const terrain::TerrainError& e) {
+    a.reason = e.what();
+    return a;
+  }
+  a.computed = true;
+  for (std::size_t k = 0; k < got.traversability.size(); ++k) {
+    if (std::isnan(got.traversability[k]) || std::isnan(want.traversability[k])) continue;
+    ++a.cells;
+    if (want.traversability[k] == 0.0f) {
+      ++a.true_hazard;
+      a.found += got.traversability[k] == 0.0f;
+    } else {
+      ++a.true_benign;
+      a.marked_hazard += got.traversability[k] == 0.0f && got.uncertain[k] == 0.0f;
+      a.marked_uncertain += got.uncertain[k] > 0.0f;
+    }
+  }
+  return a;
+}
+
+nlohmann::json ToJson(const TerrainAgreement& a) {
+  nlohmann::json out;
+  out["computed"] = a.computed;
+  if (!a.computed) {
+    out["reason"] = a.reason;
+    return out;
+  }
+  const auto fraction = [](std::size_t part, std::size_t whole) {
+    return whole > 0 ? Number(static_cast<double>(part) / static_cast<double>(whole)) : nullptr;
+  };
+  out["cells"] = a.cells;
+  out["true_hazard_cells"] = a.true_hazard;
+  out["found"] = a.found;
+  out["found_fraction"] = fraction(a.found, a.true_hazard);
+  out["true_benign_cells"] = a.true_benign;
+  out["marked_hazard"] = a.marked_hazard;
+  out["marked_hazard_fraction"] = fraction(a.marked_hazard, a.true_benign);
+  out["marked_uncertain"] = a.marked_uncertain;
+  out["marked_uncertain_fraction"] = fraction(a.marked_uncertain, a.true_benign);
   return out;
 }
 

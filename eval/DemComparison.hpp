@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/GeoTiff.hpp"  // DemRaster, ReadDemGeoTiff: band 1 elevation, band 2 its σ
+#include "terrain/TerrainLayers.hpp"
 
 namespace rovermap::eval {
 
@@ -38,7 +39,29 @@ struct DemComparison {
   int height = 0;
   bool north_row_first = true;  ///< row 0 is the northern edge (geotransform[5] < 0)
   std::vector<float> error_m;   ///< e per comparison cell, row-major, NaN where not compared
+  /// Both on the comparison grid (row-major, NaN where no data): the DEM's heights and σ and the
+  /// reference's heights, for the terrain layers' agreement; the grid's column and row spacing.
+  std::vector<float> dem_m, dem_sigma_m, reference_m;
+  double cell_x_m = 0.0, cell_y_m = 0.0;
 };
+
+/// How the terrain layers of the DEM (docs/terrain.md) agree with those of the reference,
+/// taken as the truth (1 mm σ), on the comparison grid, over the cells where both have layers.
+struct TerrainAgreement {
+  bool computed = false;
+  std::string reason;                ///< why not (a footprint larger than the grid, ...)
+  std::size_t cells = 0;             ///< cells with layers in both
+  std::size_t true_hazard = 0;       ///< the reference's traversability 0
+  std::size_t found = 0;             ///< of those, the DEM's 0 too (a hazard or uncertain)
+  std::size_t true_benign = 0;       ///< the reference's traversability > 0
+  std::size_t marked_hazard = 0;     ///< of those, the DEM's a hazard beyond doubt
+  std::size_t marked_uncertain = 0;  ///< of those, the DEM's uncertain
+};
+
+/// The layers of both grids of `comparison` (status kOk) with `options`. Never throws.
+TerrainAgreement CompareTerrain(const DemComparison& comparison,
+                                const terrain::TerrainOptions& options);
+nlohmann::json ToJson(const TerrainAgreement& agreement);
 
 /// Compares `dem` with `reference`. Never throws; a CRS mismatch, a reference without data or no
 /// cell with both gives that status and a message naming both files.

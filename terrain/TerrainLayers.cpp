@@ -136,9 +136,11 @@ TerrainLayers ComputeTerrain(const GridView& g, const TerrainOptions& o) {
                        " m is smaller than two cells of the DEM (" + std::to_string(g.cell_x_m) +
                        " × " + std::to_string(g.cell_y_m) + " m)");
   }
-  // An odd number of cells, centred on the cell, nearest to the footprint.
-  const int hx = static_cast<int>(std::lround((cells_x - 1.0) / 2.0));
-  const int hy = static_cast<int>(std::lround((cells_y - 1.0) / 2.0));
+  // An odd number of cells, centred on the cell, nearest to the footprint; an even number
+  // rounds up (0.6 m on 5 cm cells: 13, not 11 because 0.6 / 0.05 is 11.999… in binary).
+  constexpr double kRoundingSlack = 1e-9;
+  const int hx = static_cast<int>(std::lround((cells_x - 1.0) / 2.0 + kRoundingSlack));
+  const int hy = static_cast<int>(std::lround((cells_y - 1.0) / 2.0 + kRoundingSlack));
   if (2 * hx + 1 > g.width || 2 * hy + 1 > g.height) {
     throw TerrainError("terrain.footprint_m " + std::to_string(o.footprint_m) +
                        " m is larger than the DEM (" + std::to_string(g.width) + " × " +

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "eval/DemComparison.hpp"
 #include "io/GeoTiff.hpp"
 #include "terrain/TerrainLayers.hpp"
 #include "tests/support/CommandFixture.hpp"
@@ -336,6 +337,49 @@ TEST(TerrainLayers, BadFootprintsAndOptionsNameTheirKey) {
   GridView no_spacing = grid.View();
   no_spacing.cell_y_m = 0.0;
   EXPECT_THROW(ComputeTerrain(no_spacing, Options(0.5)), TerrainError);
+}
+
+// ---- eval::CompareTerrain: a DEM's hazards against a reference's ----------------------------
+
+io::DemRaster Raster(const Grid& g, bool with_sigma) {
+  io::DemRaster r;
+  r.file = "mem";
+  r.width = g.width;
+  r.height = g.height;
+  r.geotransform = {0.0, g.dx, 0.0, 0.0, 0.0, -g.dy};
+  r.elevation_m = g.z;
+  if (with_sigma) r.stddev_m = g.sigma;
+  return r;
+}
+
+TEST(TerrainAgreement, ADemThatMissesARockMissesItsHazard) {
+  const auto ground = [](bool rock) {
+    return [rock](double x, double y) {
+      return 0.02 * x + (rock && x > 1.0 && x < 1.3 && y < -1.0 && y > -1.3 ? 0.3 : 0.0);
+    };
+  };
+  std::mt19937 rng(2);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const Grid truth = MakeGrid(60, 60, 0.05, 0.05, ground(true), 0.0f);
+  const Grid seen = MakeGrid(
+      60, 60, 0.05, 0.05, [&](double x, double y) { return ground(true)(x, y) + noise(rng); },
+      0.005f);
+  const Grid blind = MakeGrid(60, 60, 0.05, 0.05, ground(false), 0.005f);
+  const eval::DemComparison good = eval::CompareDems(Raster(seen, true), Raster(truth, false));
+  const eval::TerrainAgreement a = eval::CompareTerrain(good, TerrainOptions{});
+  ASSERT_TRUE(a.computed) << a.reason;
+  EXPECT_EQ(a.true_hazard, 17u * 17u);  // the rock's 5 × 5 cells widened by the 13-cell footprint
+  EXPECT_EQ(a.found, a.true_hazard);
+  EXPECT_EQ(a.marked_hazard, 0u);
+  const eval::TerrainAgreement b = eval::CompareTerrain(
+      eval::CompareDems(Raster(blind, true), Raster(truth, false)), TerrainOptions{});
+  EXPECT_EQ(b.found, 0u);
+  EXPECT_EQ(b.true_hazard, a.true_hazard);
+  TerrainOptions huge;
+  huge.footprint_m = 10.0;
+  const eval::TerrainAgreement c = eval::CompareTerrain(good, huge);
+  EXPECT_FALSE(c.computed);
+  EXPECT_NE(c.reason.find("larger than the DEM"), std::string::npos);
 }
 
 // ---- `rovermap terrain DEM.tif --out DIR` ----------------------------------------------------
