@@ -60,6 +60,13 @@ void Validate(const ElevationMapOptions& options) {
       !std::isfinite(options.max_horizontal_sigma_cells)) {
     Invalid("max_horizontal_sigma_cells", "finite and >= 0", options.max_horizontal_sigma_cells);
   }
+  if (options.clear_min_rays < 0) Invalid("clear_min_rays", ">= 0", options.clear_min_rays);
+  if (!(options.clear_margin_m >= 0.0) || !std::isfinite(options.clear_margin_m)) {
+    Invalid("clear_margin_m", "finite and >= 0", options.clear_margin_m);
+  }
+  if (options.clear_ray_spacing_cells < 1) {
+    Invalid("clear_ray_spacing_cells", ">= 1", options.clear_ray_spacing_cells);
+  }
   if (!std::isfinite(options.grid_rotation_rad)) {
     Invalid("grid_rotation_rad", "finite", options.grid_rotation_rad);
   }

@@ -99,6 +99,17 @@ struct ElevationMapOptions {
   /// update; the fusion's own variance, hence the heights, are unchanged. Its position share
   /// still averages over frames. docs/maps.md, "The published σ".
   bool attitude_error_shared = true;
+  /// Visibility clearing (ElevationMap::ClearSeenThrough): a published surface that a later
+  /// frame's rays pass under, toward points it saw beyond, is no longer there (a person, a car
+  /// or another rover that moved away): the cell is emptied for later frames to fill. A cell
+  /// is seen through when the ray's height above it is lower than its height by more than
+  /// clear_margin_m + 3σ, by at least clear_min_rays rays of one frame. 0 rays = off.
+  int clear_min_rays = 1;
+  double clear_margin_m = 0.1;  ///< [m] beyond the cell's 3σ: the pose's and the ray's error
+  /// [cells] the rays are cast to one point per square of this many cells (the frame's first
+  /// in each): 8 (40 cm squares) keeps a KITTI frame's DEM fusion within its time without
+  /// clearing (4 doubled it: 47 → 100 ms).
+  int clear_ray_spacing_cells = 8;
   /// [rad] counter-clockwise rotation from world ENU to the grid axes (see above). Not a config
   /// key: derived from the georeference.
   double grid_rotation_rad = 0.0;
@@ -175,6 +186,8 @@ struct FusionStats {
   std::size_t dropped_out_of_grid = 0;  ///< beyond ±kMaxCellIndex
   std::size_t dropped_imprecise = 0;    ///< horizontal σ above max_horizontal_sigma_cells
   std::size_t new_tiles = 0;            ///< tiles allocated by this call
+  /// Cells the frame saw through and emptied (ClearSeenThrough, when the caller runs it).
+  std::size_t cells_cleared = 0;
 };
 
 /// Per-frame context of FuseFrame.
@@ -209,6 +222,13 @@ struct FramePart {
   const std::vector<unsigned char>* keep = nullptr;
 };
 
+/// What ClearSeenThrough did.
+struct ClearingStats {
+  std::size_t rays = 0;           ///< rays cast
+  std::size_t cells_crossed = 0;  ///< published cells the rays passed over or under [count]
+  std::size_t cells_cleared = 0;  ///< emptied [count]
+};
+
 /// For each of `cells`, how many of `cells` are the same cell (a frame's points per cell).
 std::vector<std::uint32_t> CountPerCell(const std::vector<CellIndex>& cells);
 
@@ -235,6 +255,15 @@ class ElevationMap {
   /// every frame). Gives the same as FuseFrame on the kept points moved and concatenated.
   FusionStats FuseFrame(const Eigen::Isometry3d& T_world_points, const FramePart& measured,
                         const FramePart& fill, const FrameContext& ctx);
+
+  /// Visibility clearing after a frame is fused (options' clear_*): rays from `sensor_world` to
+  /// the frame's points (`part`, moved into the world by `T_world_points`; one point per
+  /// clear_ray_spacing_cells square) are walked over the grid; a published cell this frame did
+  /// not update whose height lies above a ray by more than clear_margin_m + 3σ counts that ray,
+  /// and with clear_min_rays such rays the cell is emptied. Depth errors do not matter: they
+  /// move a point along its ray, not the ray. Never throws.
+  ClearingStats ClearSeenThrough(const Eigen::Isometry3d& T_world_points, const FramePart& part,
+                                 const Eigen::Vector3d& sensor_world, std::uint32_t frame);
 
   /// Fuses one point with a height variance [m^2] (the rule above). Returns true if the point is
   /// now part of the primary (fused into it, or its candidate took over); false if it went into

@@ -486,6 +486,10 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   const Matrix6d A = Adjoint(T_about_sensor);
   ctx.pose_covariance = A * step.covariance * A.transpose();
   result->dem = elevation_map_.FuseFrame(T, measured, between, ctx);
+  // What stood where this frame sees through is gone (a car, a person, another rover).
+  result->dem.cells_cleared =
+      elevation_map_.ClearSeenThrough(T, measured, ctx.sensor_origin_world, ctx.frame)
+          .cells_cleared;
   result->time.fuse_dem_ms = MsSince(dem_start);
 
   const auto octomap_start = Clock::now();

@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '6'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '7'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
@@ -182,7 +182,7 @@ void VisitResult(Io& io, Result& f) {
   auto& d = f.dem;
   for (auto* v :
        {&d.points, &d.fused, &d.candidate, &d.swapped, &d.rejected_outliers, &d.dropped_nonfinite,
-        &d.dropped_out_of_grid, &d.dropped_imprecise, &d.new_tiles}) {
+        &d.dropped_out_of_grid, &d.dropped_imprecise, &d.new_tiles, &d.cells_cleared}) {
     io.template Value<std::uint64_t>(*v);
   }
   auto& t = f.time;

@@ -124,6 +124,7 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
                        const std::optional<DriftMetrics>& drift) {
   const std::vector<FrameResult>& results = state.results;
   std::size_t registered = 0, partial = 0, fallbacks = 0, bad = 0, outliers = 0, nonfinite = 0;
+  std::size_t cleared = 0;
   std::map<std::string, std::size_t> image_check;
   for (const FrameResult& r : results) {
     if (r.image_check != mapper::ImageCheckOutcome::kNone) ++image_check[ToString(r.image_check)];
@@ -132,6 +133,7 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
     if (r.status == FrameStatus::kFallback || r.status == FrameStatus::kBadFrame) ++fallbacks;
     if (r.status == FrameStatus::kBadFrame) ++bad;
     outliers += r.outliers_removed;
+    cleared += r.dem.cells_cleared;
     nonfinite += r.dropped_nonfinite;
   }
   nlohmann::json timing = {
@@ -168,7 +170,8 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
         {"cells_reached", state.dem_cells_reached},
         {"tiles", state.dem_tiles},
         {"cell_size_m", state.dem.cell_size_m},
-        {"outliers_removed", outliers}}},
+        {"outliers_removed", outliers},
+        {"cells_cleared", cleared}}},
   };
   if (state.stereo_num_disparities) {
     summary["stereo"] = {{"num_disparities", *state.stereo_num_disparities}};
