@@ -155,6 +155,23 @@ TEST_F(Ros2Bag, SqliteFileAndBagDirectoryYieldTheSequence) {
   EXPECT_EQ(opened->info().directory, bag);
 }
 
+TEST_F(Ros2Bag, ASplitBagDirectoryIsReadAsOneBagInTheOrderOfItsFiles) {
+  // rosbag2 splits a long recording into files; metadata.yaml lists them in order. Here the
+  // calibration and the first two frames are in an MCAP file, the last frame in a SQLite one.
+  const fs::path bag = dir_ / "split";
+  fs::create_directory(bag);
+  Ros2Recording first;
+  first.frames = 2;
+  Write("split/split_0.mcap", first);
+  Ros2Recording second;
+  second.first_frame = 2;
+  second.calibration = false;
+  Write("split/split_1.db3", second);
+  rovermap::testing::WriteRos2Metadata(bag, {"split_0.mcap", "split_1.db3"}, "mcap");
+  Ros2BagSource source(bag, Options());
+  ExpectTheSequence(source);
+}
+
 TEST_F(Ros2Bag, OpenFrameSourceTellsTheFormsApart) {
   const fs::path mcap = Write("tiny.mcap");
   EXPECT_TRUE(IsRos2Bag(mcap));

@@ -521,10 +521,12 @@ inline void WriteRos2Metadata(const std::filesystem::path& directory,
 
 /// How WriteSequenceRos2Bag records a sequence.
 struct Ros2Recording {
-  McapLayout mcap;             ///< for *.mcap files
-  bool big_endian = false;     ///< CDR byte order of every message
-  double time_offset_s = 0.0;  ///< added to the sequence's stamps
-  std::size_t frames = std::numeric_limits<std::size_t>::max();  ///< the first frames only
+  McapLayout mcap;              ///< for *.mcap files
+  bool big_endian = false;      ///< CDR byte order of every message
+  double time_offset_s = 0.0;   ///< added to the sequence's stamps
+  std::size_t first_frame = 0;  ///< frames from this one (a split bag's later file)
+  std::size_t frames = std::numeric_limits<std::size_t>::max();  ///< up to this one (excluded)
+  bool calibration = true;  ///< camera info, /tf_static and NavSatFix before the frames
   /// Stereo images: encodings in turn (left, right, left, ...), or "png"/"jpeg".
   std::vector<std::string> encodings = {"mono8"};
   bool cloud_float64 = false;
@@ -558,14 +560,14 @@ inline std::filesystem::path WriteSequenceRos2Bag(const std::filesystem::path& s
     writer->Write(topic, type, Nanoseconds(t), data);
   };
   const double start = how.time_offset_s;  // before the first frame (or at it, from 0)
-  if (info.camera) {
+  if (info.camera && how.calibration) {
     const io::CameraModel& camera = *info.camera;
     write(topics.left_info_topic, "sensor_msgs/msg/CameraInfo", start,
           cdr.CameraInfo(camera, 0.0, start));
     write(topics.right_info_topic, "sensor_msgs/msg/CameraInfo", start,
           cdr.CameraInfo(camera, -camera.fx * camera.baseline_m, start));
   }
-  if (how.tf_static) {
+  if (how.tf_static && how.calibration) {
     Eigen::Isometry3d T_body_mast = Eigen::Isometry3d::Identity();
     T_body_mast.translation() = Eigen::Vector3d(0.1, 0.0, 0.5);
     Cdr::Transform mast_sensor{"/mast", topics.sensor_frame,
@@ -574,14 +576,14 @@ inline std::filesystem::path WriteSequenceRos2Bag(const std::filesystem::path& s
     write("/tf_static", "tf2_msgs/msg/TFMessage", start,
           cdr.Tf({{"base_link", "mast", T_body_mast, std::nullopt}, mast_sensor}, start));
   }
-  if (how.navsat) {
+  if (how.navsat && how.calibration) {
     write(topics.navsat_topic, "sensor_msgs/msg/NavSatFix", start,
           cdr.NavSatFix(0.0, 0.0, 0.0, start, -1));  // no fix yet
     write(topics.navsat_topic, "sensor_msgs/msg/NavSatFix", start,
           cdr.NavSatFix(info.origin.latitude_deg, info.origin.longitude_deg, info.origin.altitude_m,
                         start, 0));
   }
-  for (std::size_t k = 0; k < std::min(how.frames, reader.frame_count()); ++k) {
+  for (std::size_t k = how.first_frame; k < std::min(how.frames, reader.frame_count()); ++k) {
     const io::Frame frame = reader.Read(k);
     const double t = frame.timestamp + how.time_offset_s;
     if (how.odometry_on_tf) {
