@@ -1,7 +1,7 @@
 // `rovermap replay`, `import` and `campaign` on ROS 2 bags end to end: an MCAP bag of the
 // simulated sequence replays to the directory's trajectory byte for byte (and its DEM), its
-// import replays to the same again, a SQLite bag directory too; KITTI's first three frames likewise;
-// a campaign takes a bag as a traverse; a bad bag stops before any output.
+// import to within 1e-15, a SQLite bag directory byte for byte too; KITTI's first three frames
+// likewise; a campaign takes a bag as a traverse; a bad bag stops before any output.
 #include <gtest/gtest.h>
 
 #include <filesystem>
