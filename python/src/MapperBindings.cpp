@@ -239,13 +239,13 @@ void BindMapper(py::module_& m) {
   py::class_<MapperHandle>(m, "Mapper",
                            "The mapping pipeline of `rovermap replay` and `rovermap serve`, one "
                            "frame at a time")
-      .def(
-          py::init(&MakeMapper), py::arg("sequence") = py::none(), py::kw_only(),
-          py::arg("sensor") = py::none(), py::arg("camera") = py::none(),
-          py::arg("T_body_sensor") = py::none(), py::arg("origin") = py::none(),
-          py::arg("body") = "earth", py::arg("config") = py::none(),
-          R"(sequence: a sequence directory, a ROS bag (.bag; .mcap, .db3 or a rosbag2 directory) or a
-Sequence (its sensor, calibration and origin); or, without one: sensor ("stereo" or "cloud"), camera (a Camera; stereo needs one,
+      .def(py::init(&MakeMapper), py::arg("sequence") = py::none(), py::kw_only(),
+           py::arg("sensor") = py::none(), py::arg("camera") = py::none(),
+           py::arg("T_body_sensor") = py::none(), py::arg("origin") = py::none(),
+           py::arg("body") = "earth", py::arg("config") = py::none(),
+           R"(sequence: a sequence directory, a ROS bag (.bag, .mcap, .db3 or a rosbag2
+directory) or a Sequence (its sensor, calibration and origin); or, without one: sensor
+("stereo" or "cloud"), camera (a Camera; stereo needs one,
 a cloud uses it for its points' error model), T_body_sensor (4x4), origin (latitude,
 longitude[, altitude]) and body.
 config: None, a YAML file's path or a dict of keys; **overrides: mapper keys (reference=
