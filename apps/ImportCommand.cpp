@@ -96,9 +96,11 @@ std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir,
 CLI::App* AddImportCommand(CLI::App* app, ImportArgs* args) {
   CLI::App* cmd = app->add_subcommand(
       "import",
-      "Write a recording (a ROS 1 bag; options under bag. in the config) as a sequence "
-      "directory");
-  cmd->add_option("recording", args->recording, "ROS 1 bag (.bag) or sequence directory")
+      "Write a recording (a ROS 1 or ROS 2 bag; options under bag. in the config) as a "
+      "sequence directory");
+  cmd->add_option("recording", args->recording,
+                  "ROS 1 bag (.bag), ROS 2 bag (rosbag2 directory, .mcap or .db3) or sequence "
+                  "directory")
       ->required();
   cmd->add_option("--out", args->out, "Sequence directory to write (created)")->required();
   cmd->add_flag("--force", args->force, "Replace a non-empty SEQ");

@@ -99,8 +99,8 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
       "Run the mapping pipeline over a recorded sequence or ROS bag: registered trajectory, DEM, "
       "OctoMap and drift report");
   cmd->add_option("sequence", args->sequence,
-                  "Sequence directory (docs/design.md section 4) or ROS 1 bag (.bag; options under "
-                  "bag. in the config)")
+                  "Sequence directory (docs/design.md section 4), ROS 1 bag (.bag) or ROS 2 bag "
+                  "(rosbag2 directory, .mcap or .db3); bag options under bag. in the config")
       ->required();
   cmd->add_option("--out", args->out, "Output directory (created)")->required();
   cmd->add_flag("--force", args->force, "Write into a non-empty DIR (its outputs are replaced)");

@@ -101,7 +101,11 @@ CampaignPlan MakeCampaignPlan(const std::vector<fs::path>& inputs, const Campaig
     const fs::path input = fs::absolute(inputs[i]).lexically_normal();
     std::string stem = input.filename().empty() ? input.parent_path().filename().string()
                                                 : input.filename().string();
-    if (input.extension() == ".bag") stem = input.stem().string();
+    // A bag file's traverse is named without its extension (ROS 1 .bag, ROS 2 .mcap or .db3).
+    const fs::path extension = input.extension();
+    if (extension == ".bag" || extension == ".mcap" || extension == ".db3") {
+      stem = input.stem().string();
+    }
     plan.traverses.push_back({Numbered(static_cast<int>(i), SafeName(stem)), input});
   }
   return plan;

@@ -48,8 +48,9 @@ const std::map<std::string, std::string>& SectionLeads() {
        "The `serve` daemon: watching the inbox, missing frames, and how often it publishes "
        "outputs, snapshots its state and rewrites status.json."},
       {"bag",
-       "ROS 1 bags (`replay RECORDING.bag`, `import`): topics, where odometry comes from, the "
-       "sensor's mounting on the body and the geodetic origin."},
+       "ROS 1 and ROS 2 bags (`replay RECORDING.bag`, `.mcap`, `.db3` or a rosbag2 directory; "
+       "`import`): topics, where odometry comes from, the sensor's mounting on the body and the "
+       "geodetic origin."},
       {"mosaic",
        "`mosaic`: the output grid, fusion tile by tile and the co-registration of each input."},
       {"campaign", "`campaign`: the resources of its replay and mosaic tasks (Slurm or local)."},

@@ -13,375 +13,105 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <map>
-#include <mutex>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-#include <optional>
-#include <set>
+#include <string>
 #include <utility>
+#include <vector>
 
+#include "io/BagRules.hpp"
 #include "io/IoError.hpp"
-#include "io/Rpy.hpp"
 
 namespace rovermap::io {
 namespace {
 
 namespace fs = std::filesystem;
+using bag::Role;
 
-constexpr const char* kImageType = "sensor_msgs/Image";
-constexpr const char* kCompressedType = "sensor_msgs/CompressedImage";
-constexpr const char* kInfoType = "sensor_msgs/CameraInfo";
-constexpr const char* kCloudType = "sensor_msgs/PointCloud2";
-constexpr const char* kOdometryType = "nav_msgs/Odometry";
-constexpr const char* kPoseType = "geometry_msgs/PoseStamped";
-constexpr const char* kTfType = "tf2_msgs/TFMessage";
-constexpr const char* kNavSatType = "sensor_msgs/NavSatFix";
-const std::string kTfTopic = "/tf";
-const std::string kTfStaticTopic = "/tf_static";
+// ROS 1 messages as the container-independent rules read them (io/BagRules.hpp).
 
-// Where one image or cloud is: the time it was recorded at (what a View queries by) and its
-// header stamp (what tells it from others recorded at the same time).
-struct MessageRef {
-  ros::Time recorded;
-  ros::Time stamp;
-};
+bag::Stamp StampOf(const ros::Time& t) { return {t.sec, t.nsec}; }
 
-struct PoseSample {
-  double t = 0.0;
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-};
-
-std::string StampText(const ros::Time& t) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), "%u.%09u", t.sec, t.nsec);
-  return buffer;
+bag::ImageMsg ToBag(const sensor_msgs::Image& m) {
+  return {StampOf(m.header.stamp),       m.height, m.width, m.encoding, m.is_bigendian != 0, m.step,
+          {m.data.data(), m.data.size()}};
 }
 
-// tf names frames with or without a leading slash.
-std::string FrameName(const std::string& frame) {
-  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+bag::CompressedImageMsg ToBag(const sensor_msgs::CompressedImage& m) {
+  return {StampOf(m.header.stamp), m.format, {m.data.data(), m.data.size()}};
 }
 
-// @throw IoError naming `what` unless `q` is a unit quaternion (within 1e-3).
-Eigen::Isometry3d ToIsometry(double x, double y, double z, const Eigen::Quaterniond& q,
-                             const std::string& what) {
-  if (!(std::abs(q.norm() - 1.0) <= 1e-3)) {
-    throw IoError(what + ": orientation is not a unit quaternion");
+bag::CameraInfoMsg ToBag(const sensor_msgs::CameraInfo& m) {
+  bag::CameraInfoMsg info;
+  info.height = m.height;
+  info.width = m.width;
+  std::copy(m.P.begin(), m.P.end(), info.P.begin());
+  return info;
+}
+
+bag::PointCloudMsg ToBag(const sensor_msgs::PointCloud2& m) {
+  bag::PointCloudMsg cloud;
+  cloud.stamp = StampOf(m.header.stamp);
+  cloud.height = m.height;
+  cloud.width = m.width;
+  for (const sensor_msgs::PointField& f : m.fields) {
+    cloud.fields.push_back({f.name, f.offset, f.datatype});
   }
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  T.linear() = RotationFromQuaternion(q);
-  return T;
-}
-
-Eigen::Isometry3d ToIsometry(const geometry_msgs::Pose& p, const std::string& what) {
-  const auto& q = p.orientation;
-  return ToIsometry(p.position.x, p.position.y, p.position.z,
-                    Eigen::Quaterniond(q.w, q.x, q.y, q.z), what);
-}
-
-Eigen::Isometry3d ToIsometry(const geometry_msgs::Transform& t, const std::string& what) {
-  const auto& q = t.rotation;
-  return ToIsometry(t.translation.x, t.translation.y, t.translation.z,
-                    Eigen::Quaterniond(q.w, q.x, q.y, q.z), what);
-}
-
-// Position linearly, rotation by slerp, between the samples around `t` (within their span).
-Eigen::Isometry3d Interpolate(const std::vector<PoseSample>& samples, double t) {
-  auto after = std::upper_bound(samples.begin(), samples.end(), t,
-                                [](double v, const PoseSample& s) { return v < s.t; });
-  if (after == samples.begin()) ++after;  // t is the first sample's time
-  const PoseSample& a = *(after - 1);
-  if (after == samples.end() || a.t == t) return a.T;
-  const PoseSample& b = *after;
-  const double alpha = (t - a.t) / (b.t - a.t);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = a.T.translation() + alpha * (b.T.translation() - a.T.translation());
-  const Eigen::Quaterniond qa(a.T.linear());
-  const Eigen::Quaterniond qb(b.T.linear());
-  T.linear() = qa.slerp(alpha, qb).normalized().toRotationMatrix();
-  return T;
-}
-
-// The message `m` as a T. @throw IoError naming `bag` if it is not one (a topic recorded with
-// two types).
-template <typename T>
-auto Instantiate(const rosbag::MessageInstance& m, const std::string& bag) {
-  auto msg = m.instantiate<T>();
-  if (!msg) {
-    throw IoError(bag + ": " + m.getTopic() + " has a " + m.getDataType() + " message, not " +
-                  ros::message_traits::DataType<T>::value());
-  }
-  return msg;
-}
-
-bool Covers(const std::vector<PoseSample>& samples, double t) {
-  return !samples.empty() && t >= samples.front().t && t <= samples.back().t;
-}
-
-bool IsSupportedEncoding(const std::string& encoding) {
-  return encoding == "mono8" || encoding == "rgb8" || encoding == "bgr8" || encoding == "mono16";
-}
-
-// A CompressedImage's format ("png", "jpeg", "bgr8; jpeg compressed bgr8") names its codec.
-bool IsSupportedFormat(const std::string& format) {
-  return format.find("png") != std::string::npos || format.find("jpeg") != std::string::npos ||
-         format.find("jpg") != std::string::npos;
-}
-
-// An 8-bit grey copy of `msg`. @throw IoError naming `what` if it cannot be.
-cv::Mat ToGrey(const sensor_msgs::Image& msg, const std::string& what) {
-  const int width = static_cast<int>(msg.width);
-  const int height = static_cast<int>(msg.height);
-  if (!IsSupportedEncoding(msg.encoding)) {
-    throw IoError(what + ": unsupported image encoding '" + msg.encoding +
-                  "' (mono8, rgb8, bgr8, mono16)");
-  }
-  const int channels = msg.encoding == "rgb8" || msg.encoding == "bgr8" ? 3 : 1;
-  const int depth_bytes = msg.encoding == "mono16" ? 2 : 1;
-  const std::size_t row_bytes = static_cast<std::size_t>(width) * channels * depth_bytes;
-  if (width <= 0 || height <= 0 || msg.step < row_bytes ||
-      msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
-    throw IoError(what + ": image data does not fit its size (" + std::to_string(width) + "x" +
-                  std::to_string(height) + ", step " + std::to_string(msg.step) + ", " +
-                  std::to_string(msg.data.size()) + " bytes)");
-  }
-  cv::Mat grey(height, width, CV_8UC1);
-  // cv::Mat cannot take const data; the views below are only read.
-  auto* data = const_cast<std::uint8_t*>(msg.data.data());
-  if (msg.encoding == "mono8") {
-    cv::Mat(height, width, CV_8UC1, data, msg.step).copyTo(grey);
-  } else if (channels == 3) {
-    cv::cvtColor(cv::Mat(height, width, CV_8UC3, data, msg.step), grey,
-                 msg.encoding == "rgb8" ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
-  } else {
-    // mono16: the high byte, whichever order the bytes are in.
-    const int high = msg.is_bigendian ? 0 : 1;
-    for (int r = 0; r < height; ++r) {
-      const std::uint8_t* in = msg.data.data() + static_cast<std::size_t>(r) * msg.step;
-      auto* out = grey.ptr<std::uint8_t>(r);
-      for (int c = 0; c < width; ++c) out[c] = in[2 * c + high];
-    }
-  }
-  return grey;
-}
-
-// PNG or JPEG, made 8-bit grey (a 16-bit PNG keeps its high byte, as mono16 does).
-cv::Mat ToGrey(const sensor_msgs::CompressedImage& msg, const std::string& what) {
-  const cv::Mat grey = cv::imdecode(msg.data, cv::IMREAD_GRAYSCALE);
-  if (grey.empty()) throw IoError(what + ": cannot decode the " + msg.format + " image");
-  return grey;
-}
-
-// Byte offsets of x, y, z in a PointCloud2's points, and whether they are float64.
-struct CloudLayout {
-  std::array<std::uint32_t, 3> offset{};
-  bool float64 = false;
-};
-
-// @throw IoError naming `what` unless the cloud has float32 or float64 x, y, z fields inside
-//        its point_step and data for all its points.
-CloudLayout CheckCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
-  CloudLayout layout;
-  const char* names[3] = {"x", "y", "z"};
-  std::optional<std::uint8_t> datatype;
-  for (int axis = 0; axis < 3; ++axis) {
-    const auto field =
-        std::find_if(msg.fields.begin(), msg.fields.end(),
-                     [&](const sensor_msgs::PointField& f) { return f.name == names[axis]; });
-    if (field == msg.fields.end()) {
-      throw IoError(what + ": the point cloud has no '" + names[axis] + "' field");
-    }
-    if (field->datatype != sensor_msgs::PointField::FLOAT32 &&
-        field->datatype != sensor_msgs::PointField::FLOAT64) {
-      throw IoError(what + ": field '" + names[axis] + "' has datatype " +
-                    std::to_string(field->datatype) + " (float32 = 7 or float64 = 8 expected)");
-    }
-    if (datatype && *datatype != field->datatype) {
-      throw IoError(what + ": x, y and z fields differ in datatype");
-    }
-    datatype = field->datatype;
-    layout.offset[axis] = field->offset;
-  }
-  layout.float64 = *datatype == sensor_msgs::PointField::FLOAT64;
-  const std::uint32_t size = layout.float64 ? 8 : 4;
-  for (const std::uint32_t offset : layout.offset) {
-    if (offset + size > msg.point_step) {
-      throw IoError(what + ": a coordinate field lies beyond point_step " +
-                    std::to_string(msg.point_step));
-    }
-  }
-  if (msg.is_bigendian) throw IoError(what + ": big-endian point clouds are not supported");
-  const std::size_t row_bytes = static_cast<std::size_t>(msg.width) * msg.point_step;
-  if (msg.row_step < row_bytes ||
-      msg.data.size() < static_cast<std::size_t>(msg.row_step) * msg.height) {
-    throw IoError(what + ": point data does not fit its size (" + std::to_string(msg.width) + "x" +
-                  std::to_string(msg.height) + " points, step " + std::to_string(msg.point_step) +
-                  ", " + std::to_string(msg.data.size()) + " bytes)");
-  }
-  return layout;
-}
-
-// Every point of a cloud, non-finite ones (no return) included: the mapper drops and counts
-// them, as for a sequence's PLY frames (docs/design.md §9).
-registration::PointCloud ToCloud(const sensor_msgs::PointCloud2& msg, const std::string& what) {
-  const CloudLayout layout = CheckCloud(msg, what);
-  registration::PointCloud cloud;
-  cloud.points.reserve(static_cast<std::size_t>(msg.width) * msg.height);
-  for (std::uint32_t row = 0; row < msg.height; ++row) {
-    for (std::uint32_t col = 0; col < msg.width; ++col) {
-      const std::uint8_t* point = msg.data.data() + static_cast<std::size_t>(row) * msg.row_step +
-                                  static_cast<std::size_t>(col) * msg.point_step;
-      Eigen::Vector3d p;
-      for (int axis = 0; axis < 3; ++axis) {
-        if (layout.float64) {
-          double v = 0.0;
-          std::memcpy(&v, point + layout.offset[axis], sizeof(v));
-          p[axis] = v;
-        } else {
-          float v = 0.0F;
-          std::memcpy(&v, point + layout.offset[axis], sizeof(v));
-          p[axis] = v;
-        }
-      }
-      cloud.points.push_back(p);
-    }
-  }
+  cloud.is_bigendian = m.is_bigendian != 0;
+  cloud.point_step = m.point_step;
+  cloud.row_step = m.row_step;
+  cloud.data = {m.data.data(), m.data.size()};
   return cloud;
 }
 
-// The rectified pair of `left` and `right`. @throw IoError naming `name` and the topic unless
-// both projections have the rectified form [f 0 c Tx; 0 f c 0; 0 0 1 0], share intrinsics and
-// image size, the left has Tx = 0 and the right a positive baseline.
-CameraModel StereoCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right,
-                         const std::string& name, const BagOptions& o) {
-  auto check_form = [&](const sensor_msgs::CameraInfo& info, const std::string& topic) {
-    const auto& P = info.P;
-    const bool rectified = P[0] > 0.0 && P[5] > 0.0 && P[1] == 0.0 && P[4] == 0.0 && P[8] == 0.0 &&
-                           P[9] == 0.0 && P[10] == 1.0 && P[7] == 0.0 && P[11] == 0.0;
-    if (!rectified) {
-      throw IoError(name + ": " + topic +
-                    ": projection P is not that of a rectified camera ([fx 0 cx Tx; 0 fy cy 0; "
-                    "0 0 1 0] with fx, fy > 0): rovermap needs rectified images");
-    }
-    if (info.width == 0 || info.height == 0) {
-      throw IoError(name + ": " + topic + ": camera info has no image size");
-    }
-  };
-  check_form(left, o.left_info_topic);
-  check_form(right, o.right_info_topic);
-  if (right.width != left.width || right.height != left.height) {
-    throw IoError(name + ": left and right camera info differ in image size (" +
-                  std::to_string(left.width) + "x" + std::to_string(left.height) + " and " +
-                  std::to_string(right.width) + "x" + std::to_string(right.height) +
-                  "): not a rectified pair");
-  }
-  auto same = [](double a, double b) {
-    return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(a));
-  };
-  if (!same(left.P[0], right.P[0]) || !same(left.P[5], right.P[5]) ||
-      !same(left.P[2], right.P[2]) || !same(left.P[6], right.P[6])) {
-    throw IoError(name +
-                  ": left and right projections P differ in fx, fy, cx or cy: not a "
-                  "rectified pair");
-  }
-  if (left.P[3] != 0.0) {
-    throw IoError(name + ": " + o.left_info_topic + ": the left projection has Tx = P[0,3] = " +
-                  std::to_string(left.P[3]) + " (0 for the left camera of a rectified pair)");
-  }
-  CameraModel camera;
-  camera.width = static_cast<int>(left.width);
-  camera.height = static_cast<int>(left.height);
-  camera.fx = left.P[0];
-  camera.fy = left.P[5];
-  camera.cx = left.P[2];
-  camera.cy = left.P[6];
-  camera.baseline_m = 0.0 - right.P[3] / right.P[0];  // 0.0 -: no "-0" in messages
-  if (!(camera.baseline_m > 0.0)) {
-    throw IoError(name + ": " + o.right_info_topic +
-                  ": projection P gives no positive baseline (-P[0,3]/fx = " +
-                  std::to_string(camera.baseline_m) + " m): not a rectified stereo pair");
-  }
-  return camera;
+bag::PoseValue ToBag(const geometry_msgs::Pose& p) {
+  return {{p.position.x, p.position.y, p.position.z},
+          {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w}};
 }
 
-// One static transform: T_parent_child as tf gives it, a translation and a unit quaternion.
-struct StaticEdge {
-  std::string parent;
-  std::string child;
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-};
-
-// A rigid transform kept as a quaternion: chained that way, a chain whose other links do not
-// rotate ends with the sensor link's own quaternion, bit for bit (sequence.yaml's form).
-struct QuaternionTransform {
-  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-
-  QuaternionTransform operator*(const QuaternionTransform& b) const {
-    return {q * b.q, t + RotationFromQuaternion(q) * b.t};
+std::vector<bag::TransformMsg> ToBag(const tf2_msgs::TFMessage& m) {
+  std::vector<bag::TransformMsg> transforms;
+  for (const geometry_msgs::TransformStamped& t : m.transforms) {
+    const auto& v = t.transform.translation;
+    const auto& q = t.transform.rotation;
+    transforms.push_back({StampOf(t.header.stamp),
+                          t.header.frame_id,
+                          t.child_frame_id,
+                          {{v.x, v.y, v.z}, {q.x, q.y, q.z, q.w}}});
   }
-  QuaternionTransform Inverse() const {
-    const Eigen::Quaterniond q_inverse = q.conjugate();
-    return {q_inverse, -(RotationFromQuaternion(q_inverse) * t)};
-  }
-};
+  return transforms;
+}
 
-// T_from_to over the static transforms, walked either way.
-std::optional<QuaternionTransform> Chain(const std::vector<StaticEdge>& edges,
-                                         const std::string& from, const std::string& to) {
-  std::map<std::string, QuaternionTransform> reached = {{from, QuaternionTransform()}};
-  std::vector<std::string> frontier = {from};
-  while (!frontier.empty()) {
-    const std::string frame = frontier.back();
-    frontier.pop_back();
-    const QuaternionTransform T_from_frame = reached.at(frame);
-    for (const StaticEdge& e : edges) {
-      std::string next;
-      QuaternionTransform T_frame_next{e.q, e.t};
-      if (e.parent == frame) {
-        next = e.child;
-      } else if (e.child == frame) {
-        next = e.parent;
-        T_frame_next = T_frame_next.Inverse();
-      } else {
-        continue;
-      }
-      if (reached.count(next) != 0) continue;
-      reached[next] = T_from_frame * T_frame_next;
-      frontier.push_back(next);
-    }
+bag::NavSatFixMsg ToBag(const sensor_msgs::NavSatFix& m) {
+  return {StampOf(m.header.stamp), m.status.status, m.latitude, m.longitude, m.altitude};
+}
+
+// The message `m` as a T. @throw IoError naming the bag if it is not one (a topic recorded
+// with two types).
+template <typename T>
+auto Instantiate(const rosbag::MessageInstance& m, const bag::BagContents& contents) {
+  auto msg = m.instantiate<T>();
+  if (!msg) {
+    throw IoError(contents.WrongType(m.getTopic(), m.getDataType(),
+                                     ros::message_traits::DataType<T>::value()));
   }
-  const auto it = reached.find(to);
-  if (it == reached.end()) return std::nullopt;
-  return it->second;
+  return msg;
 }
 
 }  // namespace
 
 struct BagSource::Bag {
-  fs::path file;
-  BagOptions options;
-  std::mutex mutex;  // rosbag::Bag reads are not thread-safe; Read() is const
   rosbag::Bag bag;
-  // Frame k's left and right image (stereo) or cloud (first).
-  std::vector<std::pair<MessageRef, MessageRef>> frames;
+  std::vector<ros::Time> recorded;  // by MessageRef::id: when each image or cloud was recorded
 
-  // The message on `topic` recorded at ref.recorded with stamp ref.stamp.
+  // The message on `topic` recorded at ref's recording time with stamp ref.stamp.
   // @throw IoError naming the bag, topic and stamp.
   template <typename Handle>
-  void Find(const std::string& topic, const MessageRef& ref, const std::string& what,
+  void Find(const std::string& topic, const bag::MessageRef& ref, const std::string& what,
             Handle&& handle) {
     bool found = false;
     try {
-      rosbag::View view(bag, rosbag::TopicQuery(topic), ref.recorded, ref.recorded);
+      const ros::Time time = recorded.at(ref.id);
+      rosbag::View view(bag, rosbag::TopicQuery(topic), time, time);
       for (const rosbag::MessageInstance& m : view) {
         found = handle(m);
         if (found) break;
@@ -390,43 +120,6 @@ struct BagSource::Bag {
       throw IoError(what + ": " + e.what());
     }
     if (!found) throw IoError(what + ": message not found again at its recording time");
-  }
-
-  // The image `ref` on `topic`, grey. @throw IoError naming the bag, topic and stamp.
-  cv::Mat ReadImage(const std::string& topic, const MessageRef& ref, const CameraModel& camera) {
-    const std::string what = file.string() + ": " + topic + " at " + StampText(ref.stamp);
-    cv::Mat grey;
-    Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
-      if (m.getDataType() == kCompressedType) {
-        const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
-        if (!msg || msg->header.stamp != ref.stamp) return false;
-        grey = ToGrey(*msg, what);
-      } else {
-        const auto msg = m.instantiate<sensor_msgs::Image>();
-        if (!msg || msg->header.stamp != ref.stamp) return false;
-        grey = ToGrey(*msg, what);
-      }
-      return true;
-    });
-    if (grey.cols != camera.width || grey.rows != camera.height) {
-      throw IoError(what + ": image is " + std::to_string(grey.cols) + "x" +
-                    std::to_string(grey.rows) + ", the camera info says " +
-                    std::to_string(camera.width) + "x" + std::to_string(camera.height));
-    }
-    return grey;
-  }
-
-  registration::PointCloud ReadCloud(const MessageRef& ref) {
-    const std::string& topic = options.cloud_topic;
-    const std::string what = file.string() + ": " + topic + " at " + StampText(ref.stamp);
-    registration::PointCloud cloud;
-    Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
-      const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
-      if (!msg || msg->header.stamp != ref.stamp) return false;
-      cloud = ToCloud(*msg, what);
-      return true;
-    });
-    return cloud;
   }
 };
 
@@ -440,187 +133,56 @@ std::map<std::string, std::string> TopicTypes(rosbag::Bag& bag) {
   return types;
 }
 
-// The topics to read for `o`. @throw IoError naming `name` if one is missing (listing what the
-// bag has) or of another type.
-std::vector<std::string> TopicsToRead(const std::map<std::string, std::string>& types,
-                                      const BagOptions& o, const std::string& name) {
-  std::vector<std::string> topics;
-  auto want = [&](const std::string& topic, const std::set<std::string>& allowed) {
-    const auto it = types.find(topic);
-    if (it == types.end()) {
-      std::string list;
-      for (const auto& [t, type] : types)
-        list += (list.empty() ? "" : ", ") + t + " (" + type + ")";
-      throw IoError(name + ": no topic " + topic +
-                    " (the bag has: " + (list.empty() ? std::string("no topics") : list) + ")");
-    }
-    if (allowed.count(it->second) == 0) {
-      std::string list;
-      for (const std::string& a : allowed) list += (list.empty() ? "" : " or ") + a;
-      throw IoError(name + ": " + topic + " is " + it->second + ", not " + list);
-    }
-    topics.push_back(topic);
-  };
-  const bool stereo = o.sensor_type == SensorType::kStereo;
-  if (stereo) {
-    want(o.left_image_topic, {kImageType, kCompressedType});
-    want(o.right_image_topic, {kImageType, kCompressedType});
-  } else {
-    want(o.cloud_topic, {kCloudType});
-  }
-  // Clouds take a camera (their stereo error model) only when the bag has both.
-  if (stereo || (types.count(o.left_info_topic) != 0 && types.count(o.right_info_topic) != 0)) {
-    want(o.left_info_topic, {kInfoType});
-    want(o.right_info_topic, {kInfoType});
-  }
-  want(o.odometry_from_tf ? kTfTopic : o.odometry_topic,
-       {o.odometry_from_tf ? kTfType : kOdometryType});
-  if (!o.groundtruth_topic.empty()) want(o.groundtruth_topic, {kOdometryType, kPoseType});
-  if (o.T_body_sensor_from_tf_static) want(kTfStaticTopic, {kTfType});
-  if (!o.origin && types.count(o.navsat_topic) != 0) want(o.navsat_topic, {kNavSatType});
-  return topics;
-}
-
-// What one pass over a bag's messages finds.
-struct Contents {
-  std::optional<sensor_msgs::CameraInfo> left_info;
-  std::optional<sensor_msgs::CameraInfo> right_info;
-  std::vector<PoseSample> odom;   // by time
-  std::vector<PoseSample> truth;  // by time
-  std::vector<StaticEdge> statics;
-  std::set<std::string> tf_pairs;  // "parent -> child" on /tf other than the odometry's
-  std::optional<GeodeticOrigin> fix;
-  std::vector<MessageRef> lefts;  // stereo images, or clouds (in lefts), by stamp
-  std::vector<MessageRef> rights;
-};
-
-// Reads `topics` once, checking image encodings and point layouts on the way.
-// @throw IoError naming `name`, the topic and the stamp.
-Contents ReadContents(rosbag::Bag& bag, const std::vector<std::string>& topics, const BagOptions& o,
-                      const std::string& name) {
-  Contents c;
-  const bool stereo = o.sensor_type == SensorType::kStereo;
-  const std::string odom_parent = FrameName(o.odometry_parent_frame);
-  const std::string odom_child = FrameName(o.odometry_child_frame);
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
-  for (const rosbag::MessageInstance& m : view) {
-    const std::string& topic = m.getTopic();
-    const std::string& type = m.getDataType();
-    auto where = [&](const ros::Time& stamp) {
-      return name + ": " + topic + " at " + StampText(stamp);
-    };
-    if (stereo && (topic == o.left_image_topic || topic == o.right_image_topic)) {
+// Feeds one message to `c` by its role. @throw IoError naming the bag, the topic and the stamp.
+void Add(const rosbag::MessageInstance& m, bag::BagContents& c, std::vector<ros::Time>* recorded) {
+  const std::string& topic = m.getTopic();
+  switch (c.RoleOf(topic)) {
+    case Role::kImage:
       // The whole image is deserialised once here, for its stamp and encoding; none is kept.
-      ros::Time stamp;
-      if (type == kCompressedType) {
-        const auto msg = Instantiate<sensor_msgs::CompressedImage>(m, name);
-        stamp = msg->header.stamp;
-        if (!IsSupportedFormat(msg->format)) {
-          throw IoError(where(stamp) + ": unsupported compressed image format '" + msg->format +
-                        "' (png, jpeg)");
-        }
+      if (m.getDataType() == bag::Ros1Types().compressed) {
+        c.AddImage(topic, ToBag(*Instantiate<sensor_msgs::CompressedImage>(m, c)),
+                   recorded->size());
       } else {
-        const auto msg = Instantiate<sensor_msgs::Image>(m, name);
-        stamp = msg->header.stamp;
-        if (!IsSupportedEncoding(msg->encoding)) {
-          throw IoError(where(stamp) + ": unsupported image encoding '" + msg->encoding +
-                        "' (mono8, rgb8, bgr8, mono16)");
-        }
+        c.AddImage(topic, ToBag(*Instantiate<sensor_msgs::Image>(m, c)), recorded->size());
       }
-      (topic == o.left_image_topic ? c.lefts : c.rights).push_back({m.getTime(), stamp});
-    } else if (!stereo && topic == o.cloud_topic) {
-      const auto msg = Instantiate<sensor_msgs::PointCloud2>(m, name);
-      CheckCloud(*msg, where(msg->header.stamp));
-      c.lefts.push_back({m.getTime(), msg->header.stamp});
-    } else if (topic == o.left_info_topic || topic == o.right_info_topic) {
-      auto& slot = topic == o.left_info_topic ? c.left_info : c.right_info;
-      if (!slot) slot = *Instantiate<sensor_msgs::CameraInfo>(m, name);
-    } else if (topic == kTfStaticTopic || (o.odometry_from_tf && topic == kTfTopic)) {
-      const auto msg = Instantiate<tf2_msgs::TFMessage>(m, name);
-      for (const geometry_msgs::TransformStamped& t : msg->transforms) {
-        const std::string parent = FrameName(t.header.frame_id);
-        const std::string child = FrameName(t.child_frame_id);
-        const Eigen::Isometry3d T = ToIsometry(t.transform, where(t.header.stamp));
-        if (topic == kTfStaticTopic) {
-          const auto& r = t.transform.rotation;
-          c.statics.push_back(
-              {parent, child, T.translation(), Eigen::Quaterniond(r.w, r.x, r.y, r.z)});
-        } else if (parent == odom_parent && child == odom_child) {
-          c.odom.push_back({t.header.stamp.toSec(), T});
-        } else {
-          c.tf_pairs.insert(parent + " -> " + child);
-        }
-      }
-    } else if (topic == o.odometry_topic && !o.odometry_from_tf) {
-      const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
-      c.odom.push_back(
-          {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
-    } else if (topic == o.groundtruth_topic) {
-      if (type == kPoseType) {
-        const auto msg = Instantiate<geometry_msgs::PoseStamped>(m, name);
-        c.truth.push_back(
-            {msg->header.stamp.toSec(), ToIsometry(msg->pose, where(msg->header.stamp))});
+      recorded->push_back(m.getTime());
+      break;
+    case Role::kCloud:
+      c.AddCloud(ToBag(*Instantiate<sensor_msgs::PointCloud2>(m, c)), recorded->size());
+      recorded->push_back(m.getTime());
+      break;
+    case Role::kCameraInfo:
+      c.AddCameraInfo(topic, ToBag(*Instantiate<sensor_msgs::CameraInfo>(m, c)));
+      break;
+    case Role::kTf:
+      c.AddTransforms(topic, ToBag(*Instantiate<tf2_msgs::TFMessage>(m, c)));
+      break;
+    case Role::kOdometry: {
+      const auto msg = Instantiate<nav_msgs::Odometry>(m, c);
+      c.AddOdometry({StampOf(msg->header.stamp), ToBag(msg->pose.pose)});
+      break;
+    }
+    case Role::kGroundTruth:
+      if (m.getDataType() == bag::Ros1Types().pose) {
+        const auto msg = Instantiate<geometry_msgs::PoseStamped>(m, c);
+        c.AddGroundTruth({StampOf(msg->header.stamp), ToBag(msg->pose)});
       } else {
-        const auto msg = Instantiate<nav_msgs::Odometry>(m, name);
-        c.truth.push_back(
-            {msg->header.stamp.toSec(), ToIsometry(msg->pose.pose, where(msg->header.stamp))});
+        const auto msg = Instantiate<nav_msgs::Odometry>(m, c);
+        c.AddGroundTruth({StampOf(msg->header.stamp), ToBag(msg->pose.pose)});
       }
-    } else if (topic == o.navsat_topic && !c.fix) {
-      const auto msg = Instantiate<sensor_msgs::NavSatFix>(m, name);
-      const bool usable = msg->status.status >= sensor_msgs::NavSatStatus::STATUS_FIX &&
-                          std::isfinite(msg->latitude) && std::isfinite(msg->longitude) &&
-                          std::isfinite(msg->altitude) && std::abs(msg->latitude) <= 90.0 &&
-                          std::abs(msg->longitude) <= 180.0;
-      if (usable) c.fix = GeodeticOrigin{msg->latitude, msg->longitude, msg->altitude};
-    }
+      break;
+    case Role::kNavSat:
+      c.AddNavSatFix(ToBag(*Instantiate<sensor_msgs::NavSatFix>(m, c)));
+      break;
+    case Role::kNone:
+      break;
   }
-  auto by_time = [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; };
-  std::stable_sort(c.odom.begin(), c.odom.end(), by_time);
-  std::stable_sort(c.truth.begin(), c.truth.end(), by_time);
-  auto by_stamp = [](const MessageRef& a, const MessageRef& b) { return a.stamp < b.stamp; };
-  std::stable_sort(c.lefts.begin(), c.lefts.end(), by_stamp);
-  std::stable_sort(c.rights.begin(), c.rights.end(), by_stamp);
-  return c;
 }
 
-// T_body_sensor over the static transforms. @throw IoError naming `name` if they do not
-// connect the two frames.
-QuaternionTransform StaticBodySensor(const std::vector<StaticEdge>& statics, const BagOptions& o,
-                                     const std::string& name) {
-  const std::optional<QuaternionTransform> T =
-      Chain(statics, FrameName(o.body_frame), FrameName(o.sensor_frame));
-  if (T) return *T;
-  std::string seen;
-  for (const StaticEdge& e : statics)
-    seen += (seen.empty() ? "" : ", ") + e.parent + " -> " + e.child;
-  throw IoError(name + ": /tf_static does not connect " + o.body_frame + " to " + o.sensor_frame +
-                " (it has: " + (seen.empty() ? "nothing" : seen) + ")");
-}
-
-// Each left (by stamp) with the nearest unused right within `tolerance_s`.
-std::vector<std::pair<MessageRef, MessageRef>> PairImages(const std::vector<MessageRef>& lefts,
-                                                          const std::vector<MessageRef>& rights,
-                                                          double tolerance_s) {
-  std::vector<std::pair<MessageRef, MessageRef>> pairs;
-  std::size_t j = 0;
-  for (const MessageRef& left : lefts) {
-    const double t = left.stamp.toSec();
-    while (j < rights.size() && rights[j].stamp.toSec() < t - tolerance_s) ++j;
-    if (j == rights.size()) break;
-    if (j + 1 < rights.size() &&
-        std::abs(rights[j + 1].stamp.toSec() - t) < std::abs(rights[j].stamp.toSec() - t)) {
-      ++j;
-    }
-    if (std::abs(rights[j].stamp.toSec() - t) > tolerance_s) continue;
-    pairs.emplace_back(left, rights[j]);
-    ++j;
-  }
-  return pairs;
-}
-
-// Opens `bag` and reads the contents `o` asks for in one pass. @throw IoError naming `name` if
-// the bag cannot be read (unindexed, truncated, not a ROS 1 bag) or lacks a topic `o` needs.
-Contents OpenAndRead(rosbag::Bag& bag, const BagOptions& o, const std::string& name) {
+// Opens `bag` and reads the contents `c` asks for in one pass. @throw IoError naming `name` if
+// the bag cannot be read (unindexed, truncated, not a ROS 1 bag) or lacks a topic it needs.
+void OpenAndRead(rosbag::Bag& bag, bag::BagContents& c, std::vector<ros::Time>* recorded,
+                 const std::string& name) {
   try {
     try {
       bag.open(name, rosbag::bagmode::Read);
@@ -632,140 +194,56 @@ Contents OpenAndRead(rosbag::Bag& bag, const BagOptions& o, const std::string& n
       throw IoError(name + ": cannot read the bag, truncated or not a ROS 1 bag (" + e.what() +
                     ")");
     }
-    return ReadContents(bag, TopicsToRead(TopicTypes(bag), o, name), o, name);
+    rosbag::View view(bag, rosbag::TopicQuery(c.TopicsToRead(TopicTypes(bag))));
+    for (const rosbag::MessageInstance& m : view) Add(m, c, recorded);
   } catch (const rosbag::BagException& e) {
     throw IoError(name + ": cannot read the bag (" + e.what() + ")");
   }
 }
 
-// The stereo camera of the two CameraInfo, if the bag has both. @throw IoError naming `name` if
-// a stereo bag lacks one, or the odometry or the ground truth `o` asks for is missing.
-std::optional<CameraModel> CheckContents(const Contents& c, const BagOptions& o,
-                                         const std::string& name) {
-  std::optional<CameraModel> camera;
-  if (c.left_info && c.right_info) {
-    camera = StereoCamera(*c.left_info, *c.right_info, name, o);
-  } else if (o.sensor_type == SensorType::kStereo) {
-    throw IoError(name + ": no sensor_msgs/CameraInfo on " +
-                  (c.left_info ? o.right_info_topic : o.left_info_topic));
-  }
-  if (c.odom.empty() && o.odometry_from_tf) {
-    std::string seen;
-    for (const std::string& pair : c.tf_pairs) seen += (seen.empty() ? "" : ", ") + pair;
-    throw IoError(name + ": no /tf transform " + o.odometry_parent_frame + " -> " +
-                  o.odometry_child_frame + " (/tf has: " + (seen.empty() ? "nothing" : seen) + ")");
-  }
-  if (c.odom.empty()) throw IoError(name + ": no nav_msgs/Odometry on " + o.odometry_topic);
-  if (!o.groundtruth_topic.empty() && c.truth.empty()) {
-    throw IoError(name + ": no ground truth pose on " + o.groundtruth_topic);
-  }
-  return camera;
-}
-
-// The frames of a bag: each one's messages, its dead-reckoning pose and ground truth.
-struct FramePlan {
-  std::vector<std::pair<MessageRef, MessageRef>> messages;
-  std::vector<StampedPose> odometry;
-  std::vector<StampedPose> groundtruth;  // empty, or one per frame
-  SkippedFrames skipped;
-};
-
-// Frames: pairs or clouds with a pose from each trajectory without extrapolating.
-// @throw IoError naming `name` if no frame has both.
-FramePlan PlanFrames(const Contents& c, const BagOptions& o, const std::string& name) {
-  const bool stereo = o.sensor_type == SensorType::kStereo;
-  const bool has_truth = !o.groundtruth_topic.empty();
-  FramePlan plan;
-  std::vector<std::pair<MessageRef, MessageRef>> candidates;
-  if (stereo) {
-    candidates = PairImages(c.lefts, c.rights, o.pair_tolerance_s);
-    plan.skipped.unpaired_images = c.lefts.size() + c.rights.size() - 2 * candidates.size();
-  } else {
-    for (const MessageRef& cloud : c.lefts) candidates.emplace_back(cloud, cloud);
-  }
-  for (const auto& candidate : candidates) {
-    const double t = candidate.first.stamp.toSec();
-    if (!Covers(c.odom, t) || (has_truth && !Covers(c.truth, t))) {
-      ++plan.skipped.outside_pose_span;
-      continue;
-    }
-    plan.messages.push_back(candidate);
-    plan.odometry.push_back({t, Interpolate(c.odom, t), 0});
-    if (has_truth) plan.groundtruth.push_back({t, Interpolate(c.truth, t), 0});
-  }
-  if (plan.odometry.empty()) {
-    const std::string what =
-        stereo ? "left/right image pair within " + std::to_string(o.pair_tolerance_s) +
-                     " s of each other (" + o.left_image_topic + ", " + o.right_image_topic + ")"
-               : "point cloud on " + o.cloud_topic;
-    throw IoError(name + ": no " + what + " within the time span of the odometry" +
-                  (has_truth ? " and the ground truth" : ""));
-  }
-  return plan;
-}
-
-// The sequence's description: sensor, camera, T_body_sensor, origin and frame rate.
-// @throw IoError naming `name` if /tf_static does not connect the body to the sensor.
-SequenceInfo Describe(const std::filesystem::path& bag_file, const Contents& c, const BagOptions& o,
-                      const std::optional<CameraModel>& camera,
-                      const std::vector<StampedPose>& odometry) {
-  SequenceInfo info;
-  info.directory = bag_file;
-  info.sensor_type = o.sensor_type;
-  info.camera = camera;
-  // T_body_sensor's rotation from a quaternion, the form sequence.yaml keeps: an imported
-  // sequence then reads back this very rotation, and replays as the bag does.
-  const QuaternionTransform T_body_sensor =
-      o.T_body_sensor_from_tf_static
-          ? StaticBodySensor(c.statics, o, bag_file.string())
-          : QuaternionTransform{Eigen::Quaterniond(o.T_body_sensor.linear()),
-                                o.T_body_sensor.translation()};
-  // Links each unit within 1e-3 can chain to a norm sequence.yaml would refuse.
-  const Eigen::Quaterniond q = std::abs(T_body_sensor.q.norm() - 1.0) <= 1e-6
-                                   ? T_body_sensor.q
-                                   : T_body_sensor.q.normalized();
-  info.body_sensor_quaternion = q;
-  info.T_body_sensor.linear() = RotationFromQuaternion(q);
-  info.T_body_sensor.translation() = T_body_sensor.t;
-  info.origin = o.origin ? *o.origin : c.fix ? *c.fix : o.default_origin;
-  info.body = o.body;
-  const double span = odometry.back().timestamp - odometry.front().timestamp;
-  info.frame_rate_hz =
-      odometry.size() > 1 && span > 0.0 ? static_cast<double>(odometry.size() - 1) / span : 0.0;
-  return info;
-}
-
 }  // namespace
 
 BagSource::BagSource(const fs::path& bag_file, const BagOptions& options)
-    : bag_(std::make_unique<Bag>()) {
-  bag_->file = bag_file;
-  bag_->options = options;
+    : BagFrameSource(bag_file, options), bag_(std::make_unique<Bag>()) {
   const std::string name = bag_file.string();
   std::error_code error;
   if (!fs::is_regular_file(bag_file, error)) throw IoError(name + ": no such bag file");
-  const Contents contents = OpenAndRead(bag_->bag, options, name);
-  const std::optional<CameraModel> camera = CheckContents(contents, options, name);
-  FramePlan plan = PlanFrames(contents, options, name);
-  bag_->frames = std::move(plan.messages);
-  odometry_ = std::move(plan.odometry);
-  groundtruth_ = std::move(plan.groundtruth);
-  skipped_ = plan.skipped;
-  info_ = Describe(bag_file, contents, options, camera, odometry_);
+  bag::BagContents contents(bag_file, options, bag::Ros1Types());
+  OpenAndRead(bag_->bag, contents, &bag_->recorded, name);
+  Adopt(contents.Finish());
 }
 
 BagSource::~BagSource() = default;
 
-void BagSource::LoadFrame(Frame* frame) const {
-  frame->file = bag_->file;
-  const auto& [first, second] = bag_->frames[frame->index];
-  const std::lock_guard<std::mutex> lock(bag_->mutex);
-  if (info_.sensor_type == SensorType::kCloud) {
-    frame->cloud = bag_->ReadCloud(first);
-    return;
-  }
-  frame->left = bag_->ReadImage(bag_->options.left_image_topic, first, *info_.camera);
-  frame->right = bag_->ReadImage(bag_->options.right_image_topic, second, *info_.camera);
+cv::Mat BagSource::ReadImage(const std::string& topic, const bag::MessageRef& ref) const {
+  const std::string what = bag::FrameWhat(file(), topic, ref.stamp);
+  cv::Mat grey;
+  bag_->Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
+    if (m.getDataType() == bag::Ros1Types().compressed) {
+      const auto msg = m.instantiate<sensor_msgs::CompressedImage>();
+      if (!msg || StampOf(msg->header.stamp) != ref.stamp) return false;
+      grey = bag::ToGrey(ToBag(*msg), what);
+    } else {
+      const auto msg = m.instantiate<sensor_msgs::Image>();
+      if (!msg || StampOf(msg->header.stamp) != ref.stamp) return false;
+      grey = bag::ToGrey(ToBag(*msg), what);
+    }
+    return true;
+  });
+  return grey;
+}
+
+registration::PointCloud BagSource::ReadCloud(const bag::MessageRef& ref) const {
+  const std::string& topic = options().cloud_topic;
+  const std::string what = bag::FrameWhat(file(), topic, ref.stamp);
+  registration::PointCloud cloud;
+  bag_->Find(topic, ref, what, [&](const rosbag::MessageInstance& m) {
+    const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
+    if (!msg || StampOf(msg->header.stamp) != ref.stamp) return false;
+    cloud = bag::ToCloud(ToBag(*msg), what);
+    return true;
+  });
+  return cloud;
 }
 
 }  // namespace rovermap::io

@@ -7,8 +7,10 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "io/BagOptions.hpp"
+#include "io/BagRules.hpp"
 #include "io/Frame.hpp"
 #include "io/FrameSource.hpp"
 
@@ -25,7 +27,7 @@ namespace rovermap::io {
 /// (made grey), mono16 (high byte kept) or PNG/JPEG CompressedImage; clouds need float32 or
 /// float64 x, y, z fields (non-finite points are kept, for the mapper to drop and count). skipped()
 /// counts what gave no frame.
-class BagSource : public IndexedFrameSource {
+class BagSource : public bag::BagFrameSource {
  public:
   /// @throw IoError naming the bag if it cannot be read (missing, truncated, unindexed), lacks a
   ///        topic (the message lists the topics and types it has), holds a topic of the wrong
@@ -36,17 +38,13 @@ class BagSource : public IndexedFrameSource {
   BagSource(const BagSource&) = delete;
   BagSource& operator=(const BagSource&) = delete;
 
-  SkippedFrames skipped() const override { return skipped_; }
-
  private:
-  /// @throw IoError naming the bag, topic and stamp if an image cannot be decoded or does not
-  ///        have the camera's size.
-  void LoadFrame(Frame* frame) const override;
+  cv::Mat ReadImage(const std::string& topic, const bag::MessageRef& ref) const override;
+  registration::PointCloud ReadCloud(const bag::MessageRef& ref) const override;
 
-  struct Bag;  // the open rosbag::Bag and where each frame's messages are in it
+  struct Bag;  // the open rosbag::Bag and when each image or cloud was recorded
 
   std::unique_ptr<Bag> bag_;
-  SkippedFrames skipped_;
 };
 
 }  // namespace rovermap::io

@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "io/IoError.hpp"
+#include "io/Ros2Bag.hpp"
 #include "io/Sequence.hpp"
 #ifdef ROVERMAP_WITH_ROSBAG
 #include "io/BagSource.hpp"
@@ -35,6 +36,7 @@ bool IndexedFrameSource::Next(Frame* frame) {
 
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,
                                              const BagOptions& bag_options) {
+  if (IsRos2Bag(path)) return std::make_unique<Ros2BagSource>(path, bag_options);
   std::error_code error;
   if (path.extension() != ".bag" || std::filesystem::is_directory(path, error)) {
     return std::make_unique<SequenceReader>(path);

@@ -1,6 +1,7 @@
 #pragma once
 // The frames of a recording, in order, whatever holds them: a sequence directory
-// (SequenceReader) or a ROS 1 bag (BagSource). Replay and mapper::ReadAhead see only this.
+// (SequenceReader), a ROS 1 bag (BagSource) or a ROS 2 bag (Ros2BagSource). Replay and
+// mapper::ReadAhead see only this.
 
 #include <cstddef>
 #include <filesystem>
@@ -75,8 +76,9 @@ class IndexedFrameSource : public FrameSource {
   std::size_t next_ = 0;
 };
 
-/// Opens the recording at `path`: a ROS 1 bag (a file named *.bag, read by `bag_options`) or a
-/// sequence directory (docs/design.md §4).
+/// Opens the recording at `path`: a ROS 2 bag (a directory with metadata.yaml, a *.mcap or a
+/// *.db3 file), a ROS 1 bag (a file named *.bag), both read by `bag_options`, or a sequence
+/// directory (docs/design.md §4).
 /// @throw IoError naming the file (and line) at fault, or saying that this build has no bag
 ///        support (ROVERMAP_WITH_ROSBAG off).
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path,

@@ -43,7 +43,9 @@ const Target kTargets[] = {{"ply", Ply},
                            {"config", ConfigFile},
                            {"set", SetOverrides},
                            {"odom", Odom},
-                           {"geotiff", GeoTiff}};
+                           {"geotiff", GeoTiff},
+                           {"cdr", Cdr},
+                           {"mcap", Mcap}};
 
 std::string ReadBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -138,7 +140,7 @@ TEST(FuzzBounds, SequenceYamlImageOfAMillionByAMillion) {
   // One side past OpenCV's limit is named on its own line.
   EXPECT_TRUE(Contains(ErrorOf<io::IoError>([] {
                          io::ParseSequenceYaml(SequenceYamlWithCamera("640", "2000000"),
-                                                   "seq/sequence.yaml");
+                                               "seq/sequence.yaml");
                        }),
                        "seq/sequence.yaml:6: camera.height: must be <= 1048576 px (got 2000000)"));
   // The largest image OpenCV reads is still accepted.

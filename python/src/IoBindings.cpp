@@ -127,15 +127,17 @@ void BindIo(py::module_& m) {
         return "<Frame " + std::to_string(f.index) + " at " + std::to_string(f.timestamp) + " s>";
       });
 
-  py::class_<Sequence>(m, "Sequence",
-                       "A recorded sequence directory (or ROS 1 bag), validated when opened; "
-                       "frames are read one at a time (seq[i], or iterate)")
+  py::class_<Sequence>(
+      m, "Sequence",
+      "A recorded sequence directory (or ROS 1 or ROS 2 bag), validated when opened; "
+      "frames are read one at a time (seq[i], or iterate)")
       .def(py::init([](py::handle path, py::handle config, const py::kwargs& overrides) {
              const config::Config cfg = ConfigFrom(config, overrides, "bag");
              return Sequence{io::OpenFrameSource(ToPath(path), config::BagOptionsFrom(cfg.bag))};
            }),
            py::arg("path"), py::arg("config") = py::none(),
-           "path: sequence directory or .bag; config and **overrides as for Mapper (bag keys). "
+           "path: sequence directory, .bag, .mcap, .db3 or rosbag2 directory; config and "
+           "**overrides as for Mapper (bag keys). "
            "Raises OSError naming the file at fault.")
       .def("__len__", [](const Sequence& s) { return s.source->frame_count(); })
       .def(

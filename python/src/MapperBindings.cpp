@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "io/Ros2Bag.hpp"
 #include "io/Sequence.hpp"
 #include "mapper/Degeneracy.hpp"
 #include "mapper/Mapper.hpp"
@@ -40,7 +41,11 @@ io::SequenceInfo InfoFrom(py::handle sequence, py::handle sensor, py::handle cam
     if (py::isinstance<SequenceHandle>(sequence))
       return sequence.cast<const SequenceHandle&>().source->info();
     const std::filesystem::path path = ToPath(sequence);
-    if (std::filesystem::is_directory(path)) return io::ReadSequenceInfo(path);
+    // A sequence directory is read without its frames; a bag (ROS 2 bags may be directories)
+    // has to be opened.
+    if (std::filesystem::is_directory(path) && !io::IsRos2Bag(path)) {
+      return io::ReadSequenceInfo(path);
+    }
     return io::OpenFrameSource(path, config::BagOptionsFrom(cfg.bag))->info();
   }
   io::SequenceInfo info;
@@ -239,8 +244,9 @@ void BindMapper(py::module_& m) {
            py::arg("sensor") = py::none(), py::arg("camera") = py::none(),
            py::arg("T_body_sensor") = py::none(), py::arg("origin") = py::none(),
            py::arg("body") = "earth", py::arg("config") = py::none(),
-           R"(sequence: a sequence directory, .bag or Sequence (its sensor, calibration and
-origin); or, without one: sensor ("stereo" or "cloud"), camera (a Camera; stereo needs one,
+           R"(sequence: a sequence directory, a ROS bag (.bag, .mcap, .db3 or a rosbag2
+directory) or a Sequence (its sensor, calibration and origin); or, without one: sensor
+("stereo" or "cloud"), camera (a Camera; stereo needs one,
 a cloud uses it for its points' error model), T_body_sensor (4x4), origin (latitude,
 longitude[, altitude]) and body.
 config: None, a YAML file's path or a dict of keys; **overrides: mapper keys (reference=

@@ -8,7 +8,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,9 +18,11 @@
 #include "config/Config.hpp"
 #include "config/ConfigError.hpp"
 #include "eval/TrajectoryIo.hpp"
+#include "io/Cdr.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Inbox.hpp"
 #include "io/IoError.hpp"
+#include "io/Mcap.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/SequenceYaml.hpp"
 #include "io/Tum.hpp"
@@ -99,6 +103,55 @@ inline Outcome GeoTiff(std::string_view bytes) {
     ~Unlink() { VSIUnlink(kName.c_str()); }
   } unlink;
   return Run<io::IoError>([&] { io::ReadDemGeoTiff(kName); });
+}
+
+// The CDR decoders of the ROS 2 messages rovermap reads, by type name.
+struct CdrDecoder {
+  const char* type;
+  void (*decode)(io::bag::ByteView data);
+};
+inline const CdrDecoder kCdrDecoders[] = {
+    {"sensor_msgs/msg/Image", [](io::bag::ByteView d) { io::cdr::DecodeImage(d, "fuzz"); }},
+    {"sensor_msgs/msg/CompressedImage",
+     [](io::bag::ByteView d) { io::cdr::DecodeCompressedImage(d, "fuzz"); }},
+    {"sensor_msgs/msg/CameraInfo",
+     [](io::bag::ByteView d) { io::cdr::DecodeCameraInfo(d, "fuzz"); }},
+    {"sensor_msgs/msg/PointCloud2",
+     [](io::bag::ByteView d) { io::cdr::DecodePointCloud(d, "fuzz"); }},
+    {"nav_msgs/msg/Odometry", [](io::bag::ByteView d) { io::cdr::DecodeOdometry(d, "fuzz"); }},
+    {"geometry_msgs/msg/PoseStamped",
+     [](io::bag::ByteView d) { io::cdr::DecodePoseStamped(d, "fuzz"); }},
+    {"tf2_msgs/msg/TFMessage", [](io::bag::ByteView d) { io::cdr::DecodeTfMessage(d, "fuzz"); }},
+    {"sensor_msgs/msg/NavSatFix", [](io::bag::ByteView d) { io::cdr::DecodeNavSatFix(d, "fuzz"); }},
+};
+
+// One CDR message: the first byte picks the type (modulo their number), the rest is the buffer.
+inline Outcome Cdr(std::string_view bytes) {
+  if (bytes.empty()) return Outcome::kRejected;
+  const CdrDecoder& decoder =
+      kCdrDecoders[static_cast<unsigned char>(bytes[0]) % std::size(kCdrDecoders)];
+  const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data()) + 1;
+  return Run<io::IoError>([&] { decoder.decode({data, bytes.size() - 1}); });
+}
+
+// An MCAP file in memory: its channels, every message read front to back (or by the chunk
+// indexes) and decoded by its schema when rovermap reads that type, then each read again by
+// its location, as a bag's frames are.
+inline Outcome Mcap(std::string_view bytes) {
+  return Run<io::IoError>([&] {
+    io::mcap::McapReader reader(std::string(bytes), "fuzz.mcap");
+    std::set<std::uint16_t> ids;
+    for (const auto& [id, channel] : reader.channels()) ids.insert(id);
+    std::vector<io::mcap::Location> seen;
+    reader.ForEachMessage(ids, [&](const io::mcap::Message& m) {
+      const std::string& type = reader.channels().at(m.channel_id).schema_name;
+      for (const CdrDecoder& decoder : kCdrDecoders) {
+        if (type == decoder.type) decoder.decode(m.data);
+      }
+      seen.push_back(m.where);
+    });
+    for (const io::mcap::Location& where : seen) reader.ReadMessage(where);
+  });
 }
 
 }  // namespace rovermap::fuzz
