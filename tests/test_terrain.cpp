@@ -490,5 +490,42 @@ TEST_F(TerrainCommand, BadDemsAndFootprintsAreClearErrorsAndWriteNothing) {
   expect_error("terrain " + rotated.string(), 1, "rotated");
 }
 
+// ---- terrain.tif and terrain.png from `rovermap replay` --------------------------------------
+
+TEST_F(TerrainCommand, ReplayWritesTheLayersOrSaysWhyNotAndLeavesNoStaleOnes) {
+  const std::string tiny = std::string(ROVERMAP_DATASETS_DIR) + "/sim_tiny_cloud";
+  const auto out = dir_ / "replay";
+  testing::CommandResult r = Rovermap("replay " + tiny + " --out " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  nlohmann::json terrain = nlohmann::json::parse(r.out)["terrain"];
+  EXPECT_TRUE(terrain["written"].get<bool>());
+  EXPECT_GT(terrain["known_cells"].get<int>(), 500);  // 859 on its five frames
+  EXPECT_EQ(terrain["footprint_cells"], nlohmann::json::array({13, 13}));
+  const io::DemRaster dem = io::ReadDemGeoTiff(out / "dem.tif");
+  const io::DemRaster layers = io::ReadDemGeoTiff(out / "terrain.tif");
+  EXPECT_EQ(layers.geotransform, dem.geotransform);
+  EXPECT_EQ(layers.wkt, dem.wkt);
+  ASSERT_TRUE(std::filesystem::exists(out / "terrain.png"));
+
+  // A footprint larger than the map: the replay goes on, says why, and the layers of the run
+  // before are not left behind as if they were this one's.
+  r = Rovermap("replay " + tiny + " --out " + out.string() +
+               " --force --set terrain.footprint_m=100");
+  ASSERT_EQ(r.status, 0) << r.err;
+  terrain = nlohmann::json::parse(r.out)["terrain"];
+  EXPECT_FALSE(terrain["written"].get<bool>());
+  EXPECT_NE(terrain["reason"].get<std::string>().find("larger than the DEM"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(out / "terrain.tif"));
+  EXPECT_FALSE(std::filesystem::exists(out / "terrain.png"));
+
+  // Off: none written, and the summary says so.
+  const auto off = dir_ / "off";
+  r = Rovermap("replay " + tiny + " --out " + off.string() + " --set terrain.enabled=false");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["terrain"]["enabled"].get<bool>());
+  EXPECT_FALSE(std::filesystem::exists(off / "terrain.tif"));
+  EXPECT_TRUE(std::filesystem::exists(off / "dem.tif"));
+}
+
 }  // namespace
 }  // namespace rovermap::terrain
