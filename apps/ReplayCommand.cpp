@@ -83,7 +83,8 @@ void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
          << ate("odometry", "ate_rmse_m") << " m\n";
   }
   line << "replay: outputs in " << out.string()
-       << ": dem.tif dem.png map.bt trajectory.tum odometry.tum drift.csv drift.png summary.json\n";
+       << ": dem.tif dem.png terrain.tif terrain.png map.bt trajectory.tum odometry.tum drift.csv "
+          "drift.png summary.json\n";
   std::cerr << line.str();
 }
 
@@ -106,8 +107,9 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
   cmd->add_flag("--force", args->force, "Write into a non-empty DIR (its outputs are replaced)");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
-      "Writes dem.tif, map.bt, trajectory.tum, odometry.tum, drift.csv, summary.json, dem.png and\n"
-      "drift.png into DIR, each atomically; prints summary.json on stdout; progress on stderr.\n"
+      "Writes dem.tif, map.bt, trajectory.tum, odometry.tum, drift.csv, summary.json, dem.png,\n"
+      "drift.png, terrain.tif and terrain.png (terrain.enabled) into DIR, each atomically; prints "
+      "summary.json on stdout; progress on stderr.\n"
       "Exit status: 0 done (bad frames are skipped and reported), 1 bad sequence or bag, or\n"
       "cannot write, 2 usage or config error.\n");
   return cmd;

@@ -21,7 +21,7 @@ grep -E '"(rmse_m|bias_m|p95_abs_m|coverage|within_2sigma)"' "$out/replay/dem_vs
   tr -d ' ,' | sed 's/^/     /'
 echo "   (coverage: the fraction of the whole simulated terrain the traverse mapped; within_2sigma:"
 echo "    the cells whose error lies within twice the DEM's stated sigma, about 0.95 if it is right)"
-echo "   pictures: $out/replay/dem.png $out/replay/drift.png $out/replay/dem_error.png"
+echo "   pictures: $out/replay/dem.png $out/replay/drift.png $out/replay/dem_error.png $out/replay/terrain.png"
 
 # A real scan pair: Stanford bunny bun045 -> bun000, started 10° and 5 mm off the reference
 # alignment (datasets/stanford_bunny/gt_pairs.txt: rotation vector (-0.011134 0.598152
