@@ -21,6 +21,7 @@
 #include "mapper/ReadAhead.hpp"
 #include "tests/support/BagWriting.hpp"
 #include "tests/support/ErrorText.hpp"
+#include "tests/support/SameImage.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::io {
@@ -44,9 +45,7 @@ std::string ErrorOf(const std::function<void()>& f) {
   return rovermap::testing::ErrorOf<IoError>(f);
 }
 
-bool SameImage(const cv::Mat& a, const cv::Mat& b) {
-  return a.size() == b.size() && a.type() == b.type() && cv::countNonZero(a != b) == 0;
-}
+using rovermap::testing::SameImage;
 
 fs::path Bag(const std::string& name, const BagRecording& how = {},
              const fs::path& sequence = kTinyStereo) {
@@ -172,7 +171,8 @@ TEST(BagSource, PointCloud2OfFloat32AndFloat64GivesThePointsNaNsIncluded) {
 // The registered trajectory of `source` through mapper::ReadAhead, as replay runs it.
 std::vector<Eigen::Isometry3d> Replay(FrameSource* source) {
   const config::Config c;
-  mapper::Mapper m(source->info(), {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
+  mapper::Mapper m(source->info(),
+                   {c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
   mapper::ReadAhead ahead(source, &m);
   mapper::ReadAhead::Item item;
   while (ahead.Next(&item)) {

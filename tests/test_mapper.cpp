@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "config/Config.hpp"
+#include "eval/DemComparison.hpp"
 #include "eval/TrajectoryMetrics.hpp"
 #include "io/DemLayers.hpp"
 #include "io/Sequence.hpp"
-#include "io/TerrainOutputs.hpp"
 #include "mapper/FrameJudge.hpp"
 #include "mapper/Mapper.hpp"
 #include "service/DriftReport.hpp"
@@ -86,44 +86,26 @@ DemErrors Compare(const dem::ElevationMap& map, F&& truth) {
 }
 
 // The terrain layers of the map against those of the true terrain on the same cells (its heights
-// at every cell's centre, 1 mm σ), with the default footprint and limits (docs/terrain.md),
-// over the cells where the map's layers are known.
-struct HazardAgreement {
-  std::size_t true_hazard = 0;      ///< the truth's traversability 0
-  std::size_t found = 0;            ///< of those, the map's 0 too (hazard or uncertain)
-  std::size_t true_benign = 0;      ///< the truth's traversability > 0
-  std::size_t false_hazard = 0;     ///< of those, the map's a hazard beyond doubt
-  std::size_t false_uncertain = 0;  ///< of those, the map's uncertain
-};
-
+// at every cell's centre), with the default footprint and limits (docs/terrain.md): what
+// `rovermap eval --dem` reports, over the cells where the map's layers are known.
 template <typename F>
-HazardAgreement CompareTerrain(const dem::ElevationMap& map, F&& truth) {
+eval::TerrainAgreement CompareTerrain(const dem::ElevationMap& map, F&& truth) {
   const io::DemLayers dem = io::RasteriseDem(map);
-  const terrain::TerrainOptions options;
-  const terrain::TerrainLayers got = terrain::ComputeTerrain(io::GridViewOf(dem), options);
-  std::vector<float> z(dem.elevation_m.size()), sigma(z.size(), 0.001f);
+  eval::DemComparison c;
+  c.width = dem.width;
+  c.height = dem.height;
+  c.cell_x_m = c.cell_y_m = dem.cell_size_m;
+  c.dem_m = dem.elevation_m;
+  c.dem_sigma_m = dem.stddev_m;
+  c.reference_m.resize(dem.elevation_m.size());
   for (int r = 0; r < dem.height; ++r) {
-    for (int c = 0; c < dem.width; ++c) {
-      const dem::CellIndex cell{dem.min.x + c, dem.max.y - r};
-      const Eigen::Vector2d p = map.CellCenterWorld(cell);
-      z[static_cast<std::size_t>(r) * dem.width + c] = static_cast<float>(truth(p.x(), p.y()));
+    for (int col = 0; col < dem.width; ++col) {
+      const Eigen::Vector2d p = map.CellCenterWorld({dem.min.x + col, dem.max.y - r});
+      c.reference_m[static_cast<std::size_t>(r) * dem.width + col] =
+          static_cast<float>(truth(p.x(), p.y()));
     }
   }
-  const terrain::TerrainLayers want = terrain::ComputeTerrain(
-      {dem.width, dem.height, dem.cell_size_m, dem.cell_size_m, z.data(), sigma.data()}, options);
-  HazardAgreement a;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    if (std::isnan(got.traversability[i]) || std::isnan(want.traversability[i])) continue;
-    if (want.traversability[i] == 0.0f) {
-      ++a.true_hazard;
-      a.found += got.traversability[i] == 0.0f;
-    } else {
-      ++a.true_benign;
-      a.false_hazard += got.traversability[i] == 0.0f && got.uncertain[i] == 0.0f;
-      a.false_uncertain += got.uncertain[i] > 0.0f;
-    }
-  }
-  return a;
+  return eval::CompareTerrain(c, terrain::TerrainOptions{});
 }
 
 // Writes a simulated sequence into a scratch directory.
@@ -143,7 +125,7 @@ fs::path Simulate(const sim::SimOptions& o, const std::string& name, sim::Simula
 struct Traverse {
   double drift_ratio = 0.0;  ///< registered ATE origin / dead reckoning's
   DemErrors dem;
-  HazardAgreement terrain;
+  eval::TerrainAgreement terrain;
   std::size_t ran_to_max_iterations = 0;  ///< frames whose matcher never stopped
 };
 
@@ -166,7 +148,7 @@ Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
       "found, of %zu benign %zu marked hazard and %zu uncertain\n",
       name.c_str(), reg.ate_origin_m.rmse, odo.ate_origin_m.rmse, t.dem.cells, t.dem.rmse_m,
       t.dem.p95_m, t.dem.off_20cm, t.dem.within_2sigma, t.terrain.found, t.terrain.true_hazard,
-      t.terrain.true_benign, t.terrain.false_hazard, t.terrain.false_uncertain);
+      t.terrain.true_benign, t.terrain.marked_hazard, t.terrain.marked_uncertain);
   return t;
 }
 
@@ -174,11 +156,11 @@ Traverse ReplaySimulated(const sim::SimOptions& o, const std::string& name) {
 // crater rims beyond the default limits) and call no benign ground a sure hazard. Measured:
 // cloud 6846 of 6948 found, of 4628 benign none marked hazard, 1259 uncertain; stereo 4401 of
 // 4474, of 3964 none, 1610 uncertain.
-void ExpectHazardsFound(const HazardAgreement& a) {
+void ExpectHazardsFound(const eval::TerrainAgreement& a) {
   ASSERT_GT(a.true_hazard, 1000u);
   ASSERT_GT(a.true_benign, 1000u);
   EXPECT_GE(static_cast<double>(a.found), 0.9 * static_cast<double>(a.true_hazard));
-  EXPECT_LE(static_cast<double>(a.false_hazard), 0.05 * static_cast<double>(a.true_benign));
+  EXPECT_LE(static_cast<double>(a.marked_hazard), 0.05 * static_cast<double>(a.true_benign));
 }
 
 TEST(Mapper, SimulatedCloudTraverse) {

@@ -19,6 +19,7 @@
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/ErrorText.hpp"
 #include "tests/support/Ros2BagWriting.hpp"
+#include "tests/support/SameImage.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace rovermap::io {
@@ -39,9 +40,7 @@ std::string ErrorOf(const std::function<void()>& f) {
   return rovermap::testing::ErrorOf<IoError>(f);
 }
 
-bool SameImage(const cv::Mat& a, const cv::Mat& b) {
-  return a.size() == b.size() && a.type() == b.type() && cv::countNonZero(a != b) == 0;
-}
+using rovermap::testing::SameImage;
 
 class Ros2Bag : public ::testing::Test {
  protected:
