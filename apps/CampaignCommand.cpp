@@ -290,6 +290,7 @@ int RunStep(Step step, const CampaignLayout& layout, const CampaignPlan& plan, i
     }
     case Step::kFinish: {
       std::string mosaic_error;
+      nlohmann::json terrain;
       try {
         const mosaic::MosaicPlan mosaic_plan =
             mosaic::ParseMosaicPlan(io::ReadWholeFile(layout.MosaicPlan()), layout.MosaicPlan());
@@ -300,6 +301,7 @@ int RunStep(Step step, const CampaignLayout& layout, const CampaignPlan& plan, i
           std::error_code ignored;
           fs::remove(layout.MosaicPart(part), ignored);
         }
+        terrain = WriteMosaicTerrain(layout.Mosaic(), cfg.terrain);
       } catch (const std::exception& e) {
         const campaign::ReadStatus planned =
             campaign::ReadTaskStatus(layout.Status(Step::kMosaicPlan, 0));
@@ -308,7 +310,8 @@ int RunStep(Step step, const CampaignLayout& layout, const CampaignPlan& plan, i
                            : e.what();
         std::cerr << "rovermap: campaign: no mosaic: " << mosaic_error << "\n";
       }
-      const std::string summary = campaign::CampaignSummaryJson(layout, plan, mosaic_error);
+      const std::string summary =
+          campaign::CampaignSummaryJson(layout, plan, mosaic_error, terrain);
       io::WriteFileAtomically(layout.Summary(), summary);
       return mosaic_error.empty() ? kExitOk : kExitFailure;
     }

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@
 #include "io/FrameSource.hpp"
 #include "io/RegistrationPreview.hpp"
 #include "mapper/Mapper.hpp"
+#include "terrain/TerrainOptions.hpp"
 
 namespace rovermap::apps {
 
@@ -107,6 +109,13 @@ struct TerrainArgs {
 CLI::App* AddTerrainCommand(CLI::App* app, TerrainArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.
 int RunTerrain(const TerrainArgs& args);
+/// The terrain layers of a mosaic NAME.tif, beside it: NAME_terrain.tif and NAME_terrain.png
+/// (io::WriteTerrainTiled, bounded memory), unless `options.enabled` is false. A mosaic
+/// smaller than the footprint gets none, and says why. @return what summary.json says of
+/// them: `written`, the counts, or `reason`.
+/// @throw io::IoError naming the file if an output cannot be written.
+nlohmann::json WriteMosaicTerrain(const std::filesystem::path& mosaic,
+                                  const terrain::TerrainOptions& options);
 
 struct CampaignArgs {
   ConfigArgs config;

@@ -84,6 +84,16 @@ int RunMosaic(const MosaicArgs& args) {
     throw config::ConfigError(e.what());
   }
   std::cout << mosaic::MosaicReportJson(result, cfg.mosaic);
+  const nlohmann::json terrain = WriteMosaicTerrain(out, cfg.terrain);
+  if (terrain.value("written", false)) {
+    std::cerr << "rovermap: mosaic: terrain layers in " << terrain["file"].get<std::string>()
+              << " and " << terrain["preview"].get<std::string>() << ": " << terrain["hazard_cells"]
+              << " hazard, " << terrain["uncertain_cells"] << " uncertain, "
+              << terrain["benign_cells"] << " benign of " << terrain["known_cells"] << " cells\n";
+  } else if (terrain.contains("reason")) {
+    std::cerr << "rovermap: mosaic: no terrain layers: " << terrain["reason"].get<std::string>()
+              << "\n";
+  }
   for (const mosaic::InputReport& input : result.inputs) {
     if (!input.reference && !input.applied && cfg.mosaic.coregister) {
       const bool why = input.status == "refused" || input.status == "no_overlap";

@@ -18,7 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using core::MsSince;
 
-
 Eigen::Isometry3d ParseInit(const std::string& text) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   if (text.empty()) return T;

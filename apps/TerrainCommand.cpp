@@ -42,51 +42,65 @@ int RunTerrain(const TerrainArgs& args) {
   const config::Config cfg = LoadConfigArgs(args.config);
   const std::filesystem::path out(args.out);
   CheckOutputDirectory(out, args.force, "overwrite terrain.tif and terrain.png");
-  const io::DemRaster raster = io::ReadDemGeoTiff(args.dem);
-  std::size_t heights = 0;
-  for (float z : raster.elevation_m) heights += std::isnan(z) ? 0 : 1;
-  if (heights == 0)
-    throw io::IoError(raster.file + ": the DEM holds no height (every cell is nodata)");
-  const terrain::GridView grid = io::GridViewOf(raster);
-  terrain::TerrainLayers layers;
-  try {
-    layers = terrain::ComputeTerrain(grid, cfg.terrain);
-  } catch (const terrain::TerrainError& e) {
-    throw UsageError(raster.file + ": " + e.what());
-  }
   std::filesystem::create_directories(out);
-  io::RasterFrame frame;
-  frame.width = raster.width;
-  frame.height = raster.height;
-  frame.geotransform = raster.geotransform;
-  frame.wkt = raster.wkt;
-  io::WriteTerrainGeoTiff(out / "terrain.tif", frame, layers, cfg.terrain);
-  io::WriteTerrainPreview(out / "terrain.png", io::DemLayersOf(raster), layers, {});
+  // A row of tiles at a time: a mosaic of any size in bounded memory (docs/terrain.md).
+  io::TiledTerrain t;
+  try {
+    t = io::WriteTerrainTiled(args.dem, out / "terrain.tif", out / "terrain.png", cfg.terrain);
+  } catch (const terrain::TerrainError& e) {
+    throw UsageError(args.dem + ": " + e.what());
+  }
+  const terrain::TerrainLayers& layers = t.counts;
 
   nlohmann::json summary;
-  summary["dem"] = raster.file;
-  summary["width"] = raster.width;
-  summary["height"] = raster.height;
-  summary["cell_m"] = {grid.cell_x_m, grid.cell_y_m};
-  const std::string band2 =
-      raster.band_descriptions.size() > 1 && !raster.band_descriptions[1].empty()
-          ? " (" + raster.band_descriptions[1] + ")"
-          : "";
+  summary["dem"] = args.dem;
+  summary["width"] = t.width;
+  summary["height"] = t.height;
+  summary["cell_m"] = {t.cell_x_m, t.cell_y_m};
+  const std::string band2 = t.sigma_band.empty() ? "" : " (" + t.sigma_band + ")";
   summary["sigma"] = layers.has_sigma ? "band 2" + band2 : "none: from the fits' residuals";
   summary["footprint_m"] = cfg.terrain.footprint_m;
   summary["footprint_cells"] = {layers.footprint_cols, layers.footprint_rows};
-  summary["height_cells"] = heights;
+  summary["height_cells"] = t.height_cells;
   summary["known_cells"] = layers.known;
   summary["hazard_cells"] = layers.hazard;
   summary["uncertain_cells"] = layers.uncertain_cells;
   summary["benign_cells"] = layers.benign;
   summary["time_ms"] = core::MsSince(start);
   std::cout << summary.dump(2) << "\n";
-  std::cerr << "terrain: layers on " << layers.known << " cells (the DEM has " << heights
+  std::cerr << "terrain: layers on " << layers.known << " cells (the DEM has " << t.height_cells
             << " heights): " << layers.hazard << " hazard, " << layers.uncertain_cells
             << " uncertain, " << layers.benign << " benign; outputs in " << out.string()
             << ": terrain.tif terrain.png\n";
   return kExitOk;
+}
+
+nlohmann::json WriteMosaicTerrain(const std::filesystem::path& mosaic,
+                                  const terrain::TerrainOptions& options) {
+  nlohmann::json j = {{"enabled", options.enabled}};
+  if (!options.enabled) return j;
+  const std::string stem = mosaic.stem().string();
+  const std::filesystem::path tif = mosaic.parent_path() / (stem + "_terrain.tif");
+  const std::filesystem::path png = mosaic.parent_path() / (stem + "_terrain.png");
+  try {
+    const io::TiledTerrain t = io::WriteTerrainTiled(mosaic, tif, png, options);
+    j["written"] = true;
+    j["file"] = tif.filename().string();
+    j["preview"] = png.filename().string();
+    j["known_cells"] = t.counts.known;
+    j["hazard_cells"] = t.counts.hazard;
+    j["uncertain_cells"] = t.counts.uncertain_cells;
+    j["benign_cells"] = t.counts.benign;
+    j["footprint_cells"] = {t.counts.footprint_cols, t.counts.footprint_rows};
+  } catch (const terrain::TerrainError& e) {
+    // Not an error of the mosaic: it is smaller than the rover. No stale layers stay.
+    std::error_code ignored;
+    std::filesystem::remove(tif, ignored);
+    std::filesystem::remove(png, ignored);
+    j["written"] = false;
+    j["reason"] = e.what();
+  }
+  return j;
 }
 
 }  // namespace rovermap::apps

@@ -97,5 +97,9 @@ report serve "$W/serve.samples"
 writes() { awk -v k="$1" '$0 ~ "after frame " k "," {sub(/.*after /, ""); print}' "$W/serve.log"; }
 echo "serve, $(writes $((N / 10 - 1)))"
 echo "serve, $(writes $((N - 1)))"
+# The terrain layers of the last publication: computed only in the tiles that changed since
+# the one before (docs/terrain.md).
+terrain_line() { tr -d ' \n' <"$1" | grep -o '"terrain":{[^}]*}' | grep -o '"\(compute_ms\|tiles\|tiles_computed\|time_ms\)":[0-9.]*' | tr '\n' ' '; }
+echo "terrain at the end: serve $(terrain_line "$W/serve/summary.json"); replay $(terrain_line "$W/replay/summary.json")"
 echo "maps at the end (replay): $(grep -o '"cells": [0-9]*' "$W/replay/summary.json"), OctoMap $(grep -o '"leaves": [0-9]*' "$W/replay/summary.json")"
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

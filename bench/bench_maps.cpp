@@ -15,6 +15,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "dem/BatchOcTree.hpp"
@@ -24,6 +25,9 @@
 #include "dem/QuietStderr.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
+#include "io/TerrainOutputs.hpp"
+#include "io/TiledGeoTiff.hpp"
+#include "terrain/TerrainCache.hpp"
 #include "terrain/TerrainLayers.hpp"
 
 namespace {
@@ -53,6 +57,15 @@ std::vector<Eigen::Vector3d> StereoFrame(double x0, std::size_t n, unsigned seed
     }
   }
   return points;
+}
+
+long PeakRssKiB() {  // VmHWM
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return 0;
 }
 
 long RssKiB() {
@@ -315,6 +328,80 @@ BENCHMARK(BM_TerrainLayers)
     ->ArgName("footprint_cells")
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// serve's publication of the same DEM through a TerrainCache: between two publications a patch
+// of `range(0)` × `range(0)` cells changed (200: the 10 m square a stereo frame reaches, on 5 cm
+// cells), somewhere new each time; only the tiles whose footprints it touches are computed.
+void BM_TerrainPublication(benchmark::State& state) {
+  TerrainGrid grid(2000);
+  const int patch = static_cast<int>(state.range(0));
+  terrain::TerrainOptions options;
+  terrain::TerrainCache cache;
+  cache.Update(grid.View(), options);
+  std::size_t computed = 0, publications = 0;
+  int at = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    at = (at + 613) % (grid.side - patch);  // a new place each time
+    for (int r = at; r < at + patch; ++r)
+      for (int c = at; c < at + patch; ++c)
+        grid.z[static_cast<std::size_t>(r) * grid.side + c] += 0.001f;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(cache.Update(grid.View(), options).known);
+    computed += cache.tiles_computed();
+    ++publications;
+  }
+  state.counters["tiles"] = static_cast<double>(cache.tiles());
+  state.counters["tiles_computed"] =
+      static_cast<double>(computed) / static_cast<double>(std::max<std::size_t>(1, publications));
+}
+BENCHMARK(BM_TerrainPublication)
+    ->Arg(200)
+    ->ArgName("patch_cells")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The terrain layers of the largest mosaic the issue names (7500 × 5000 cells of 5 cm, 375 m ×
+// 250 m, heights and σ), a row of tiles at a time from the file (rovermap terrain, the mosaic's
+// NAME_terrain.tif): time, and the process's peak memory against what the layers would take in
+// memory at once (6 bands + the DEM's 2, 1.2 GB).
+void BM_TerrainLargestMosaic(benchmark::State& state) {
+  constexpr int kWidth = 7500, kHeight = 5000;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "rovermap_bench_mosaic";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path dem = dir / "mosaic.tif";
+  {
+    io::RegisterGdal();
+    io::BoundGdalCache();
+    OGRSpatialReference srs;
+    srs.importFromEPSG(32633);
+    io::GdalDatasetPtr ds =
+        io::CreateStaging(dem, dem, kWidth, kHeight, {500000.0, 0.05, 0.0, 4000000.0, 0.0, -0.05},
+                          srs, {{"elevation", "m"}, {"elevation_stddev", "m"}});
+    std::vector<float> z(kWidth * 256), sigma(kWidth * 256, 0.02f);
+    for (int row0 = 0; row0 < kHeight; row0 += 256) {
+      const int rows = std::min(256, kHeight - row0);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < kWidth; ++c)
+          z[static_cast<std::size_t>(r) * kWidth + c] =
+              static_cast<float>(Terrain(0.05 * c, -0.05 * (row0 + r)));
+      io::WriteWindow(ds.get(), dem, 1, 0, row0, kWidth, rows, z.data());
+      io::WriteWindow(ds.get(), dem, 2, 0, row0, kWidth, rows, sigma.data());
+    }
+    io::CloseStaging(std::move(ds), dem);
+  }
+  const long before_kib = PeakRssKiB();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        io::WriteTerrainTiled(dem, dir / "terrain.tif", dir / "terrain.png", {}).counts.known);
+  }
+  state.counters["megacells"] = kWidth * kHeight / 1e6;
+  state.counters["peak_rss_mib"] = static_cast<double>(PeakRssKiB()) / 1024.0;
+  state.counters["peak_rss_before_mib"] = static_cast<double>(before_kib) / 1024.0;
+  std::filesystem::remove_all(dir);
+}
+BENCHMARK(BM_TerrainLargestMosaic)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The same plane fit and step written the obvious way (grid_map's filters loop so): every
 // cell gathers its footprint and solves its 3 × 3 normal equations; one core, 500 × 500 cells.

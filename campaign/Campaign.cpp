@@ -179,7 +179,7 @@ int TaskCount(Step step, const CampaignPlan& plan) {
 }
 
 std::string CampaignSummaryJson(const CampaignLayout& layout, const CampaignPlan& plan,
-                                const std::string& mosaic_error) {
+                                const std::string& mosaic_error, const nlohmann::json& terrain) {
   const json mosaic_report = ReadJson(layout.MosaicReport());
   json traverses = json::array();
   int succeeded = 0;
@@ -237,6 +237,7 @@ std::string CampaignSummaryJson(const CampaignLayout& layout, const CampaignPlan
     mosaic["report"] = "mosaic.json";
     mosaic.update(Pick(mosaic_report, {"width", "height", "cell_size_m", "valid_cells", "tiles"}));
     mosaic["traverses"] = mosaic_report.contains("inputs") ? mosaic_report["inputs"].size() : 0;
+    if (!terrain.is_null()) mosaic["terrain"] = terrain;
   }
   const json out = {{"traverses", plan.traverses.size()},
                     {"succeeded", succeeded},

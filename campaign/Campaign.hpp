@@ -5,6 +5,7 @@
 // scripts; it runs nothing itself.
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,9 +85,11 @@ ReadStatus ReadTaskStatus(const std::filesystem::path& file);
 /// summary.json: per traverse its status (and why it failed), frames, fallbacks, drift and its
 /// mosaic correction; the mosaic's size and which traverses it holds. No timings and no absolute
 /// campaign paths, so that a campaign run anywhere, by Slurm or locally, gives the same text.
-/// `mosaic_error`: why the mosaic could not be built ("" when it was).
+/// `mosaic_error`: why the mosaic could not be built ("" when it was); `terrain`: what was
+/// written of its terrain layers (apps::WriteMosaicTerrain), put under `mosaic` when not null.
 std::string CampaignSummaryJson(const CampaignLayout& layout, const CampaignPlan& plan,
-                                const std::string& mosaic_error);
+                                const std::string& mosaic_error,
+                                const nlohmann::json& terrain = nullptr);
 
 /// The batch scripts of the four steps (sbatch files; the arrays by SLURM_ARRAY_TASK_ID), each
 /// running `rovermap campaign-task STEP DIR INDEX`.

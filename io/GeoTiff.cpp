@@ -19,37 +19,12 @@
 #include "io/DemLayers.hpp"
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/TiledGeoTiff.hpp"
 
 namespace rovermap::io {
 namespace {
 
-void RegisterGdal() {
-  static std::once_flag once;
-  std::call_once(once, [] { GDALAllRegister(); });
-}
-
-struct DatasetCloser {
-  void operator()(GDALDataset* ds) const {
-    if (ds != nullptr) GDALClose(GDALDataset::ToHandle(ds));
-  }
-};
-using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
-
-// Keeps GDAL from printing: its errors are collected and turned into IoError messages.
-class QuietGdal {
- public:
-  QuietGdal() {
-    CPLPushErrorHandler(CPLQuietErrorHandler);
-    CPLErrorReset();
-  }
-  ~QuietGdal() { CPLPopErrorHandler(); }
-  QuietGdal(const QuietGdal&) = delete;
-  QuietGdal& operator=(const QuietGdal&) = delete;
-  static std::string Last() {
-    const char* msg = CPLGetLastErrorMsg();
-    return (msg != nullptr && *msg != '\0') ? std::string(" (") + msg + ")" : std::string();
-  }
-};
+using DatasetPtr = GdalDatasetPtr;
 
 // Most memory ReadDemGeoTiff may need for one raster: a 5 cm DEM of about 470 m x 470 m with its
 // three bands.

@@ -36,4 +36,28 @@ GeoTiffInfo WriteTerrainGeoTiff(const std::filesystem::path& path, const RasterF
                                 const terrain::TerrainOptions& options,
                                 const GeoTiffOptions& tiff = {});
 
+/// What WriteTerrainTiled read and computed.
+struct TiledTerrain {
+  terrain::TerrainLayers counts;  ///< counts, footprint and has_sigma; the layer vectors empty
+  int width = 0;                  ///< [cells]
+  int height = 0;                 ///< [cells]
+  double cell_x_m = 0.0, cell_y_m = 0.0;
+  std::size_t height_cells = 0;  ///< cells of the DEM with a height
+  std::string sigma_band;        ///< band 2's description when it is the σ, else ""
+};
+
+/// terrain.tif for the DEM GeoTIFF `dem` (north-up, in metres; band 2 its σ as RasterHasSigma
+/// says) in bounded memory, for DEMs too large to hold (a campaign's mosaic): the heights are
+/// read a row of tiles at a time (terrain::ComputeTerrainByRows) and the layers staged in a
+/// tiled GeoTIFF beside `tif`, then copied into the COG. The same bands, metadata and values as
+/// WriteTerrainGeoTiff of the whole DEM's layers. terrain.png at `png` (when not empty) from
+/// the layers and heights read back decimated to the preview's size. Each file atomic; nothing
+/// is left on an error.
+/// @throw IoError naming the file if the DEM cannot be read, holds no height, has a rotated
+///        grid or a geographic CRS, or an output cannot be written.
+/// @throw terrain::TerrainError for a footprint smaller than two cells or larger than the DEM.
+TiledTerrain WriteTerrainTiled(const std::filesystem::path& dem, const std::filesystem::path& tif,
+                               const std::filesystem::path& png,
+                               const terrain::TerrainOptions& options);
+
 }  // namespace rovermap::io

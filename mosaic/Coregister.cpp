@@ -1,4 +1,3 @@
-#include "core/Units.hpp"
 #include "mosaic/Coregister.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -10,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "core/Units.hpp"
 #include "mosaic/Fusion.hpp"
 #include "registration/Icp.hpp"
 

@@ -21,6 +21,7 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/TiledGeoTiff.hpp"
 #include "mosaic/Coregister.hpp"
 #include "mosaic/Fusion.hpp"
 #include "mosaic/Warp.hpp"
@@ -35,10 +36,6 @@ using detail::FusedLayers;
 using detail::Input;
 using detail::OutputGrid;
 using detail::Window;
-
-// GDAL's block cache when the user set none: the default (5 % of the RAM) would dominate the
-// memory of a tiled mosaic.
-constexpr GIntBig kCacheBytes = GIntBig{64} << 20;
 
 void CheckOptions(const MosaicOptions& options) {
   auto fail = [](const std::string& key, const std::string& why) {
@@ -123,87 +120,17 @@ OutputGrid MakeGrid(const std::vector<Input>& inputs, OGRSpatialReference srs,
   return grid;
 }
 
-// Temporary files beside the output, removed unless committed.
-class TemporaryFile {
- public:
-  explicit TemporaryFile(const fs::path& out, const std::string& tag) {
-    std::string pattern =
-        (out.parent_path() / ("." + out.filename().string() + "." + tag + "-XXXXXX")).string();
-    const int fd = ::mkstemp(pattern.data());
-    if (fd < 0) {
-      throw io::IoError(out.string() + ": cannot create a temporary file beside it (" +
-                        std::generic_category().message(errno) + ")");
-    }
-    // mkstemp makes the file 0600: the mosaic gets the mode any new file would (0666 less the
-    // umask), as the other outputs.
-    const mode_t mask = ::umask(0);
-    ::umask(mask);
-    ::fchmod(fd, 0666 & ~mask);
-    ::close(fd);
-    path_ = pattern;
-  }
-  ~TemporaryFile() {
-    if (!path_.empty()) {
-      std::error_code ignored;
-      fs::remove(path_, ignored);
-    }
-  }
-  TemporaryFile(const TemporaryFile&) = delete;
-  TemporaryFile& operator=(const TemporaryFile&) = delete;
-  const fs::path& path() const { return path_; }
-  /// Renamed over `out` (io::CommitTemporaryFile); no longer removed here.
-  void CommitTo(const fs::path& out) {
-    const fs::path temp = path_;
-    path_.clear();
-    io::CommitTemporaryFile(temp, out);
-  }
-
- private:
-  fs::path path_;
-};
-
-[[noreturn]] void FailWrite(const fs::path& out, const std::string& what) {
-  const char* msg = CPLGetLastErrorMsg();
-  throw io::IoError(out.string() + ": " + what +
-                    (msg != nullptr && *msg != '\0' ? std::string(" (") + msg + ")" : ""));
-}
-
-const char* const kBandNames[4] = {"elevation", "elevation_stddev", "count", "disagreement"};
-
-// A GDAL option list (free with CSLDestroy).
-char** CreationOptions(std::initializer_list<std::pair<const char*, const char*>> options) {
-  char** list = nullptr;
-  for (const auto& [name, value] : options) list = CSLSetNameValue(list, name, value);
-  return list;
-}
+using io::FailGdalWrite;
+using io::TemporaryFile;
 
 // The tiled intermediate GeoTIFF the tiles are written into.
 DatasetPtr CreateStaging(const fs::path& staging, const fs::path& out, const OutputGrid& grid,
                          const std::string& datum, std::size_t inputs) {
-  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
-  if (gtiff == nullptr) FailWrite(out, "GDAL lacks the GTiff driver");
-  char** create = CreationOptions({{"TILED", "YES"},
-                                   {"BLOCKXSIZE", "256"},
-                                   {"BLOCKYSIZE", "256"},
-                                   {"COMPRESS", "DEFLATE"},
-                                   {"PREDICTOR", "3"},
-                                   {"ZLEVEL", "1"},
-                                   {"BIGTIFF", "IF_SAFER"},
-                                   {"SPARSE_OK", "TRUE"}});
-  DatasetPtr ds(gtiff->Create(staging.c_str(), grid.width, grid.height, 4, GDT_Float32, create));
-  CSLDestroy(create);
-  if (!ds) FailWrite(out, "cannot create the staging GeoTIFF");
-  std::array<double, 6> g = grid.geotransform;
-  ds->SetGeoTransform(g.data());
-  ds->SetSpatialRef(&grid.srs);
+  DatasetPtr ds = io::CreateStaging(
+      staging, out, grid.width, grid.height, grid.geotransform, grid.srs,
+      {{"elevation", "m"}, {"elevation_stddev", "m"}, {"count", ""}, {"disagreement", ""}});
   if (!datum.empty()) ds->SetMetadataItem("ELEVATION_DATUM", datum.c_str());
   ds->SetMetadataItem("MOSAIC_INPUTS", std::to_string(inputs).c_str());
-  for (int b = 0; b < 4; ++b) {
-    GDALRasterBand* band = ds->GetRasterBand(b + 1);
-    band->SetDescription(kBandNames[b]);
-    if (b < 2) band->SetUnitType("m");
-    band->SetNoDataValue(std::numeric_limits<double>::quiet_NaN());
-  }
   return ds;
 }
 
@@ -212,42 +139,8 @@ void WriteTile(GDALDataset* staging, const fs::path& out, const Window& window,
   std::vector<float>* bands[4] = {&fused.elevation_m, &fused.stddev_m, &fused.count,
                                   &fused.disagreement};
   for (int b = 0; b < 4; ++b) {
-    if (staging->GetRasterBand(b + 1)->RasterIO(
-            GF_Write, window.col0, window.row0, window.width, window.height, bands[b]->data(),
-            window.width, window.height, GDT_Float32, 0, 0, nullptr) != CE_None) {
-      FailWrite(out, "cannot write a tile");
-    }
-  }
-}
-
-void TranslateToCog(const fs::path& staging, const fs::path& cog, const fs::path& out) {
-  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("COG");
-  if (driver == nullptr) FailWrite(out, "GDAL lacks the COG driver");
-  DatasetPtr source(GDALDataset::Open(staging.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
-  if (!source) FailWrite(out, "cannot reopen the staging GeoTIFF");
-  char** create = CreationOptions({{"COMPRESS", "DEFLATE"},
-                                   {"PREDICTOR", "FLOATING_POINT"},
-                                   {"LEVEL", "1"},
-                                   {"BLOCKSIZE", "512"},
-                                   {"OVERVIEWS", "AUTO"},
-                                   {"RESAMPLING", "AVERAGE"},
-                                   {"BIGTIFF", "IF_SAFER"},
-                                   {"NUM_THREADS", "2"}});
-  CPLErrorReset();
-  GDALDataset* copy =
-      driver->CreateCopy(cog.c_str(), source.get(), FALSE, create, nullptr, nullptr);
-  CSLDestroy(create);
-  bool ok = copy != nullptr && CPLGetLastErrorType() < CE_Failure;
-  if (copy != nullptr) GDALClose(GDALDataset::ToHandle(copy));
-  ok = ok && CPLGetLastErrorType() < CE_Failure;
-  if (!ok) FailWrite(out, "GDAL cannot write the COG");
-  // On disk before the rename, as io::WriteFileAtomically does.
-  const int fd = ::open(cog.c_str(), O_RDONLY | O_CLOEXEC);
-  const bool synced = fd >= 0 && ::fsync(fd) == 0;
-  if (fd >= 0) ::close(fd);
-  if (!synced) {
-    throw io::IoError(out.string() + ": cannot flush the COG to disk (" +
-                      std::generic_category().message(errno) + ")");
+    io::WriteWindow(staging, out, b + 1, window.col0, window.row0, window.width, window.height,
+                    bands[b]->data());
   }
 }
 
@@ -256,7 +149,7 @@ void TranslateToCog(const fs::path& staging, const fs::path& cog, const fs::path
 class GdalScope {
  public:
   GdalScope() {
-    if (CPLGetConfigOption("GDAL_CACHEMAX", nullptr) == nullptr) GDALSetCacheMax64(kCacheBytes);
+    io::BoundGdalCache();
     CPLPushErrorHandler(CPLQuietErrorHandler);
   }
   ~GdalScope() { CPLPopErrorHandler(); }
@@ -346,19 +239,11 @@ void FuseRows(const Placed& placed, int row0, int row1, const MosaicOptions& opt
   }
 }
 
-// Closes a GeoTIFF being written, with GDAL's last error if flushing it failed.
-void CloseStaging(DatasetPtr staged, const fs::path& out) {
-  CPLErrorReset();
-  GDALDataset* raw = staged.release();
-  GDALClose(GDALDataset::ToHandle(raw));
-  if (CPLGetLastErrorType() >= CE_Failure) FailWrite(out, "cannot finish the staging GeoTIFF");
-}
-
 // The staged grid as the COG `out`, then the report beside it; both atomically.
 void WriteCog(const fs::path& staging, const fs::path& out, const fs::path& report,
               const MosaicResult& result, const MosaicOptions& options) {
   TemporaryFile cog(out, "tmp");
-  TranslateToCog(staging, cog.path(), out);
+  io::TranslateToCog(staging, cog.path(), out);
   if (report.empty()) {
     cog.CommitTo(out);
     return;
@@ -467,7 +352,7 @@ MosaicResult BuildMosaic(const std::vector<fs::path>& files, const fs::path& out
   DatasetPtr staged = CreateStaging(staging.path(), out, placed.grid,
                                     placed.inputs.front().datum_text, placed.inputs.size());
   FuseRows(placed, 0, placed.grid.height, options, staged.get(), out, &result);
-  CloseStaging(std::move(staged), out);
+  io::CloseStaging(std::move(staged), out);
   WriteCog(staging.path(), out, report, result, options);
   return result;
 }
@@ -551,7 +436,7 @@ void FuseMosaicPart(const MosaicPlan& plan, int part, int parts, const fs::path&
   FuseRows(placed, row0, row1, options, staged.get(), out, &counts);
   staged->SetMetadataItem("MOSAIC_TILES", std::to_string(counts.tiles).c_str());
   staged->SetMetadataItem("MOSAIC_VALID_CELLS", std::to_string(counts.valid_cells).c_str());
-  CloseStaging(std::move(staged), out);
+  io::CloseStaging(std::move(staged), out);
   temp.CommitTo(out);
 }
 
@@ -594,12 +479,12 @@ MosaicResult AssembleMosaic(const MosaicPlan& plan, int parts,
         if (staged->GetRasterBand(b)->RasterIO(GF_Write, 0, row, grid.width, rows, buffer.data(),
                                                grid.width, rows, GDT_Float32, 0, 0,
                                                nullptr) != CE_None) {
-          FailWrite(out, "cannot write a tile");
+          FailGdalWrite(out, "cannot write a tile");
         }
       }
     }
   }
-  CloseStaging(std::move(staged), out);
+  io::CloseStaging(std::move(staged), out);
   WriteCog(staging.path(), out, report, result, options);
   return result;
 }

@@ -101,10 +101,6 @@ void Warp(const Input& input, GDALDataset* src, GDALDataset* dst, const std::vec
 
 }  // namespace
 
-void DatasetCloser::operator()(GDALDataset* ds) const {
-  if (ds != nullptr) GDALClose(GDALDataset::ToHandle(ds));
-}
-
 Window OutputGrid::Cover(const Eigen::Vector2d& min, const Eigen::Vector2d& max) const {
   const double s = cell_size_m();
   const int col0 = std::max(0, static_cast<int>(std::floor((min.x() - geotransform[0]) / s)));

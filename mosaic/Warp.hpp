@@ -13,12 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "io/TiledGeoTiff.hpp"
+
 namespace rovermap::mosaic::detail {
 
-struct DatasetCloser {
-  void operator()(GDALDataset* ds) const;
-};
-using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
+using DatasetPtr = io::GdalDatasetPtr;
 
 /// A rigid correction found by co-registration, in output-CRS coordinates relative to `origin`:
 /// p' = origin + T·(p − origin). Plus the shift between the input's and the mosaic's

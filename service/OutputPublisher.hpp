@@ -14,6 +14,7 @@
 #include "eval/EvalOptions.hpp"
 #include "service/DriftReport.hpp"
 #include "service/OutputState.hpp"
+#include "terrain/TerrainCache.hpp"
 
 namespace rovermap::mapper {
 
@@ -45,6 +46,9 @@ class OutputPublisher {
   std::atomic<bool> finished_{false};  // the thread's last act
   std::exception_ptr error_;           // written by the thread, read after joining it
   double last_write_ms_ = 0.0;
+  // The last publication's terrain layers: the next computes only the tiles that changed. Only
+  // the publication thread touches it, one publication at a time.
+  terrain::TerrainCache terrain_cache_;
 };
 
 }  // namespace rovermap::mapper

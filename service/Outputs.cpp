@@ -17,17 +17,23 @@ namespace rovermap::mapper {
 namespace {
 
 // terrain.tif and terrain.png from the DEM's layers (docs/terrain.md); what summary.json says of
-// them. A DEM smaller than the footprint (the first frames) gets none, and says why.
+// them. A DEM smaller than the footprint (the first frames) gets none, and says why. `cache`
+// holds the last publication's layers (serve); without one every tile is computed.
 nlohmann::json WriteTerrain(const std::filesystem::path& out_dir, const OutputState& state,
                             const std::vector<io::PreviewTrajectory>& drawn,
-                            const std::function<void(const char*)>& done) {
+                            const std::function<void(const char*)>& done,
+                            terrain::TerrainCache* cache) {
   nlohmann::json j;
   j["enabled"] = state.terrain.enabled;
   if (!state.terrain.enabled) return j;
   const auto start = std::chrono::steady_clock::now();
+  terrain::TerrainCache own;
+  if (cache == nullptr) cache = &own;
   try {
-    const terrain::TerrainLayers layers =
-        terrain::ComputeTerrain(io::GridViewOf(state.dem), state.terrain);
+    const terrain::TerrainLayers& layers = cache->Update(io::GridViewOf(state.dem), state.terrain);
+    j["compute_ms"] = core::MsSince(start);
+    j["tiles"] = cache->tiles();
+    j["tiles_computed"] = cache->tiles_computed();
     io::WriteTerrainGeoTiff(out_dir / "terrain.tif",
                             io::DemRasterFrame(state.dem, state.georeference), layers,
                             state.terrain);
@@ -62,7 +68,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
 
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputState& state,
                             RunInfo run, const eval::EvalOptions& eval_options,
-                            const std::function<void(const std::string&)>& after_file) {
+                            const std::function<void(const std::string&)>& after_file,
+                            terrain::TerrainCache* terrain_cache) {
   const auto done = [&](const char* name) {
     if (after_file) after_file(name);
   };
@@ -104,7 +111,7 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   }
   io::WriteDemPreview(out_dir / "dem.png", state.dem, drawn);
   done("dem.png");
-  nlohmann::json terrain = WriteTerrain(out_dir, state, drawn, done);
+  nlohmann::json terrain = WriteTerrain(out_dir, state, drawn, done, terrain_cache);
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
   WriteDriftPlot(out_dir / "drift.png", results, drift);
   done("drift.png");

@@ -10,6 +10,7 @@
 #include "mapper/Mapper.hpp"
 #include "service/DriftReport.hpp"
 #include "service/OutputState.hpp"
+#include "terrain/TerrainCache.hpp"
 
 namespace rovermap::mapper {
 
@@ -26,9 +27,12 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
                             const std::function<void(const std::string&)>& after_file = {});
 
 /// The same from an OutputState taken before (the daemon writes it on a thread of its own).
-/// Touches nothing but `state` and `out_dir`.
+/// Touches nothing but `state`, `out_dir` and `terrain_cache`: when given, the terrain layers
+/// are computed anew only in the tiles whose heights changed since its last use (the daemon
+/// keeps one for its publications).
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputState& state,
                             RunInfo run, const eval::EvalOptions& eval_options,
-                            const std::function<void(const std::string&)>& after_file = {});
+                            const std::function<void(const std::string&)>& after_file = {},
+                            terrain::TerrainCache* terrain_cache = nullptr);
 
 }  // namespace rovermap::mapper

@@ -4,6 +4,8 @@
 // prefix sums of the weighted moments: the same cost whatever the footprint's size.
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,6 +24,11 @@ struct GridView {
   /// Each height's σ [m]; nullptr when the DEM has none (the footprint's residual scatter
   /// then stands for the heights' noise).
   const float* stddev_m = nullptr;
+  /// Where cell (0, 0) lies in the map's own cell grid [cells]: layers are computed in tiles of
+  /// `terrain.tile_cells` aligned to that grid, so that a map which grows keeps its tiles (and
+  /// their values) where they were (TerrainCache). 0 for a DEM on its own.
+  std::int64_t origin_col = 0;  ///< increasing east
+  std::int64_t origin_row = 0;  ///< increasing south
 };
 
 /// Thrown for options or a grid the layers cannot be computed for.
@@ -60,5 +67,28 @@ std::string CheckOptions(const TerrainOptions& options);
 /// @throw TerrainError if the options are not usable, the grid's spacing is not positive, or
 ///        the footprint is smaller than two cells or larger than the grid.
 TerrainLayers ComputeTerrain(const GridView& grid, const TerrainOptions& options);
+
+/// A grid's size, for ComputeTerrainByRows.
+struct GridShape {
+  int width = 0;
+  int height = 0;
+  double cell_x_m = 0.0;
+  double cell_y_m = 0.0;
+  bool has_sigma = false;
+};
+/// Fills `elevation_m` (and `stddev_m` when the grid has σ) with grid rows [row0, row0 + rows),
+/// every column, row-major, NaN for no height.
+using ReadRows = std::function<void(int row0, int rows, std::vector<float>* elevation_m,
+                                    std::vector<float>* stddev_m)>;
+/// Receives the layers of grid rows [row0, row0 + layers.height), every column.
+using WriteRows = std::function<void(int row0, const TerrainLayers& layers)>;
+
+/// ComputeTerrain for a grid too large to hold: one row of tiles at a time, read with the
+/// footprint's halo above and below, so memory is bounded by the grid's width × a tile's
+/// height. The layers written are ComputeTerrain's on the whole grid, to the bit.
+/// @return the counts and footprint (the layer vectors empty).
+/// @throw TerrainError as ComputeTerrain; what `read` and `write` throw.
+TerrainLayers ComputeTerrainByRows(const GridShape& shape, const TerrainOptions& options,
+                                   const ReadRows& read, const WriteRows& write);
 
 }  // namespace rovermap::terrain

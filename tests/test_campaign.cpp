@@ -86,6 +86,11 @@ TEST_F(Campaign, LocalRunReplaysEveryTraverseAndMosaicsTheOnesThatWorked) {
   EXPECT_EQ(summary["mosaic"]["status"], "ok");
   EXPECT_EQ(summary["mosaic"]["traverses"], 3);
   EXPECT_GT(summary["mosaic"]["valid_cells"].get<long>(), 5000);
+  // The mosaic's terrain layers, beside it (written a row of tiles at a time).
+  EXPECT_EQ(summary["mosaic"]["terrain"]["written"], true) << summary["mosaic"].dump();
+  EXPECT_GT(summary["mosaic"]["terrain"]["known_cells"].get<long>(), 1000);
+  EXPECT_TRUE(fs::exists(out / "mosaic_terrain.tif"));
+  EXPECT_TRUE(fs::exists(out / "mosaic_terrain.png"));
 
   // The mosaic is, to the byte, the one `rovermap mosaic` makes of the same DEMs in one process
   // (the campaign fused it in three parts); mosaic.json names them relative to the campaign.

@@ -599,11 +599,23 @@ TEST_F(MosaicTest, CommandWritesTheMosaicAndRefusesToOverwrite) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "m.json"));
   EXPECT_NE(r.out.find("\"valid_cells\": 400"), std::string::npos) << r.out;
+  // 1 m cells: the 0.6 m footprint is smaller than two of them, so no layers, and why.
+  EXPECT_FALSE(fs::exists(dir_ / "m_terrain.tif"));
+  EXPECT_NE(r.err.find("no terrain layers: terrain.footprint_m"), std::string::npos) << r.err;
   r = Rovermap("mosaic " + a + " --out " + out);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
-  r = Rovermap("mosaic " + a + " --out " + out + " --force --set mosaic.tile_cells=16");
+  r = Rovermap("mosaic " + a + " --out " + out +
+               " --force --set mosaic.tile_cells=16 --set terrain.footprint_m=5");
   EXPECT_EQ(r.status, 0) << r.err;
+  // With a footprint of the rover's size on these cells: NAME_terrain.tif and .png beside it.
+  ASSERT_TRUE(fs::exists(dir_ / "m_terrain.tif")) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "m_terrain.png"));
+  EXPECT_NE(r.err.find("terrain layers in m_terrain.tif and m_terrain.png"), std::string::npos)
+      << r.err;
+  const io::DemRaster layers = io::ReadDemGeoTiff(dir_ / "m_terrain.tif");
+  EXPECT_EQ(layers.width, 20);
+  EXPECT_EQ(layers.band_descriptions.front(), "slope_deg");
 }
 
 // Each mosaic's report is named after it: a second mosaic of another name in the same folder

@@ -78,6 +78,10 @@ class Serve : public rovermap::testing::ServeFixture {
     std::size_t cells = 0;
     for (float z : a.elevation_m) cells += std::isfinite(z) ? 1 : 0;
     EXPECT_GT(cells, 100u);
+    // terrain.tif: the daemon computes the layers again only in the tiles whose heights changed
+    // since its last publication (terrain::TerrainCache); they equal replay's, to the byte.
+    ASSERT_TRUE(fs::exists(replay / "terrain.tif"));
+    EXPECT_EQ(Slurp(serve / "terrain.tif"), Slurp(replay / "terrain.tif"));
     // drift.csv row for row, but for time_ms (column 21).
     const auto rows_a = DataLines(replay / "drift.csv");
     const auto rows_b = DataLines(serve / "drift.csv");
@@ -131,6 +135,7 @@ TEST_F(Serve, FramesDroppedOneByOneGiveReplaysOutputs) {
   const nlohmann::json summary = nlohmann::json::parse(Slurp(out / "summary.json"));
   EXPECT_EQ(summary["frames"], 5);
   EXPECT_TRUE(summary.contains("metrics"));
+  EXPECT_LE(summary["terrain"]["tiles_computed"], summary["terrain"]["tiles"]);
   EXPECT_EQ(nlohmann::json::parse(Slurp(out / "status.json"))["state"], "stopped");
   EXPECT_EQ(CountLines(Slurp(dir_ / "log"), "serve: frame "), 5);
 }

@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -13,6 +14,8 @@
 
 #include "eval/DemComparison.hpp"
 #include "io/GeoTiff.hpp"
+#include "io/TerrainOutputs.hpp"
+#include "terrain/TerrainCache.hpp"
 #include "terrain/TerrainLayers.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/DemWriting.hpp"
@@ -177,6 +180,123 @@ TEST(TerrainLayers, TilesDoNotChangeTheLayers) {
   }
   EXPECT_EQ(a.known, b.known);
   EXPECT_EQ(a.hazard, b.hazard);
+}
+
+// A map as serve publishes it again and again: it grows (west and south), gains ground and
+// changes in places. Through a TerrainCache each publication equals a full computation on its
+// grid, to the bit, and only the tiles whose footprints saw a change are computed anew.
+TEST(TerrainCache, EqualsAFullComputationAsTheMapGrowsAndComputesOnlyChangedTiles) {
+  constexpr double kCell = 0.05;
+  // Heights of global cell (col, row), rows counting south; `bumped` cells raised by 10 cm.
+  std::vector<std::pair<std::int64_t, std::int64_t>> bumped;
+  const auto height = [&](std::int64_t col, std::int64_t row) {
+    const double x = col * kCell, y = -row * kCell;
+    double z = 0.2 * std::sin(0.9 * x) * std::cos(0.6 * y) + 0.004 * std::sin(37.0 * x + 11.0 * y);
+    for (const auto& [c, r] : bumped) z += (c == col && r == row) ? 0.1 : 0.0;
+    return static_cast<float>(z);
+  };
+  struct Map {
+    std::int64_t col0, row0;
+    int width, height;
+    std::vector<float> z, sigma;
+    GridView View(bool with_sigma = true) const {
+      GridView g{width, height, kCell, kCell, z.data(), with_sigma ? sigma.data() : nullptr};
+      g.origin_col = col0;
+      g.origin_row = row0;
+      return g;
+    }
+  };
+  // Data on [data_c0, data_c1) × [data_r0, data_r1), in a grid of exactly those bounds.
+  const auto make = [&](std::int64_t c0, std::int64_t c1, std::int64_t r0, std::int64_t r1) {
+    Map m{c0, r0, static_cast<int>(c1 - c0), static_cast<int>(r1 - r0), {}, {}};
+    for (std::int64_t r = r0; r < r1; ++r) {
+      for (std::int64_t c = c0; c < c1; ++c) {
+        // A hole pattern, fixed to the ground, so that coverage varies.
+        const bool hole = (c * 7 + r * 3) % 23 == 0;
+        m.z.push_back(hole ? kNaN : height(c, r));
+        m.sigma.push_back(hole ? kNaN : 0.01f + 0.0001f * static_cast<float>((c + 2 * r) % 13));
+      }
+    }
+    return m;
+  };
+  const auto bits_equal = [](const std::vector<float>& a, const std::vector<float>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (std::isnan(a[i]) != std::isnan(b[i])) return false;
+      if (!std::isnan(a[i]) && std::memcmp(&a[i], &b[i], sizeof(float)) != 0) return false;
+    }
+    return true;
+  };
+  TerrainOptions o = Options(0.6);  // 13 × 13 cells: a halo of 6
+  o.tile_cells = 64;
+  TerrainCache cache;
+  const auto publish = [&](const Map& m, bool with_sigma = true) {
+    const TerrainLayers& got = cache.Update(m.View(with_sigma), o);
+    const TerrainLayers full = ComputeTerrain(m.View(with_sigma), o);
+    EXPECT_TRUE(bits_equal(got.slope_deg, full.slope_deg));
+    EXPECT_TRUE(bits_equal(got.slope_sigma_deg, full.slope_sigma_deg));
+    EXPECT_TRUE(bits_equal(got.roughness_m, full.roughness_m));
+    EXPECT_TRUE(bits_equal(got.step_m, full.step_m));
+    EXPECT_TRUE(bits_equal(got.traversability, full.traversability));
+    EXPECT_TRUE(bits_equal(got.uncertain, full.uncertain));
+    EXPECT_EQ(got.known, full.known);
+    EXPECT_EQ(got.hazard, full.hazard);
+    EXPECT_EQ(got.uncertain_cells, full.uncertain_cells);
+    EXPECT_GT(got.known, 1000u);
+    return cache.tiles_computed();
+  };
+
+  // Global columns [-40, 160) and rows [-30, 90): tiles -1..2 × -1..1, 12 tiles.
+  const Map first = make(-40, 160, -30, 90);
+  EXPECT_EQ(publish(first), 12u);
+  EXPECT_EQ(cache.tiles(), 12u);
+  EXPECT_EQ(publish(first), 0u);  // nothing changed
+
+  // The map grows west (to -120) and south (to 150): the old tiles whose footprints reach the
+  // new ground (the western and southern edges, and those the old grid did not hold whole) are
+  // computed; the others are copied.
+  const Map grown = make(-120, 160, -30, 150);
+  // Tiles -2..2 × -1..2; copied: columns 0..2 of rows -1 and 0 (their footprints lie within
+  // the old ground, which did not change).
+  EXPECT_EQ(publish(grown), 20u - 6u);
+  EXPECT_EQ(cache.tiles(), 20u);
+
+  // One cell changes in the middle of tile (1, 0): that tile alone.
+  bumped = {{100, 30}};
+  EXPECT_EQ(publish(make(-120, 160, -30, 150)), 1u);
+  // One near the corner of four tiles (64, 64): the four whose footprints reach it.
+  bumped.push_back({62, 66});
+  EXPECT_EQ(publish(make(-120, 160, -30, 150)), 4u);
+
+  // Other options, or heights without σ: every tile.
+  const Map last = make(-120, 160, -30, 150);
+  o.max_step_m = 0.12;
+  EXPECT_EQ(publish(last), cache.tiles());
+  EXPECT_EQ(publish(last, false), cache.tiles());
+  EXPECT_EQ(publish(last, false), 0u);
+
+  // A grid that reaches farther without more ground (NaN around it) gives the same values for
+  // the same cells, also in the tiles the old grid held only in part.
+  Map padded{last.col0 - 50, last.row0 - 20, last.width + 90, last.height + 70, {}, {}};
+  padded.z.assign(static_cast<std::size_t>(padded.width) * padded.height, kNaN);
+  padded.sigma = padded.z;
+  for (int r = 0; r < last.height; ++r) {
+    for (int c = 0; c < last.width; ++c) {
+      const std::size_t to = static_cast<std::size_t>(r + 20) * padded.width + (c + 50);
+      padded.z[to] = last.z[static_cast<std::size_t>(r) * last.width + c];
+      padded.sigma[to] = last.sigma[static_cast<std::size_t>(r) * last.width + c];
+    }
+  }
+  const TerrainLayers small = ComputeTerrain(last.View(), o);
+  const TerrainLayers large = ComputeTerrain(padded.View(), o);
+  for (int r = 0; r < last.height; ++r) {
+    for (int c = 0; c < last.width; ++c) {
+      const float a = small.roughness_m[static_cast<std::size_t>(r) * last.width + c];
+      const float b = large.roughness_m[static_cast<std::size_t>(r + 20) * padded.width + c + 50];
+      ASSERT_TRUE((std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0)
+          << r << " " << c;
+    }
+  }
 }
 
 TEST(TerrainLayers, SinusoidRoughnessAndStep) {
@@ -417,6 +537,53 @@ class TerrainCommand : public testing::CommandFixture {
     return path;
   }
 };
+
+// The layers of a DEM too large to hold, a row of tiles at a time (rovermap terrain, the
+// mosaic's): the same values as the whole DEM's in memory, to the bit, with holes and with a
+// tile row much smaller than the DEM.
+TEST_F(TerrainCommand, TileRowsGiveTheWholeDemsLayersToTheBit) {
+  const auto path = dir_ / "wavy.tif";
+  testing::WriteDem(path, 300, 230, testing::NorthUp(500000.0, 5200000.0, 0.05), "EPSG:32632",
+                    [](double x, double y) {
+                      const bool hole = std::fmod(std::abs(x * 7.3 + y * 3.1), 1.3) < 0.05;
+                      const float z = static_cast<float>(
+                          0.3 * std::sin(0.9 * x) * std::cos(1.1 * y) + 0.01 * std::sin(40.0 * x));
+                      return testing::Cell{hole ? kNaN : z, 0.01f, 3.0f};
+                    });
+  TerrainOptions o = Options(0.6);
+  o.tile_cells = 40;  // 6 tile rows, each read with the halo of the next
+  const io::TiledTerrain t =
+      io::WriteTerrainTiled(path, dir_ / "terrain.tif", dir_ / "terrain.png", o);
+  const io::DemRaster raster = io::ReadDemGeoTiff(path);
+  const TerrainLayers whole = ComputeTerrain(io::GridViewOf(raster), o);
+  EXPECT_EQ(t.counts.known, whole.known);
+  EXPECT_EQ(t.counts.hazard, whole.hazard);
+  EXPECT_EQ(t.counts.uncertain_cells, whole.uncertain_cells);
+  EXPECT_EQ(t.counts.benign, whole.benign);
+  EXPECT_TRUE(t.counts.has_sigma);
+  std::size_t heights = 0;
+  for (float z : raster.elevation_m) heights += std::isnan(z) ? 0 : 1;
+  EXPECT_EQ(t.height_cells, heights);
+  EXPECT_LT(heights, raster.elevation_m.size());  // the holes are there
+  const std::vector<float>* layers[] = {&whole.slope_deg,      &whole.slope_sigma_deg,
+                                        &whole.roughness_m,    &whole.step_m,
+                                        &whole.traversability, &whole.uncertain};
+  for (int band = 1; band <= 6; ++band) {
+    const std::vector<float> tiled = ReadBand(dir_ / "terrain.tif", band);
+    const std::vector<float>& expected = *layers[band - 1];
+    ASSERT_EQ(tiled.size(), expected.size());
+    for (std::size_t i = 0; i < tiled.size(); ++i) {
+      ASSERT_TRUE((std::isnan(tiled[i]) && std::isnan(expected[i])) ||
+                  std::memcmp(&tiled[i], &expected[i], sizeof(float)) == 0)
+          << "band " << band << " cell " << i;
+    }
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "terrain.png"));
+  for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".terrain.tif."), std::string::npos)
+        << "a staging file was left: " << entry.path();
+  }
+}
 
 TEST_F(TerrainCommand, WritesTheLayersOnTheDemsGridWithTheRockAsAHazard) {
   const auto dem = WriteRockDem();

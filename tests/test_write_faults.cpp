@@ -388,22 +388,28 @@ class MosaicFault : public WriteFaults {
   }
 
   // The mosaic of `inputs` over the previous one in OUT, with files limited to `limit` bytes:
-  // status 1 naming `target`; the previous m.tif and m.json byte for byte, nothing else.
+  // status 1 naming `target`; the previous m.tif, m.json and terrain layers byte for byte,
+  // nothing else.
   void ExpectFailsKeepingThePrevious(const std::vector<fs::path>& inputs, rlim_t limit,
                                      const std::string& target) {
     const std::string cog = Slurp(out_ / "m.tif");
     const std::string report = Slurp(out_ / "m.json");
+    const bool had_terrain = fs::exists(out_ / "m_terrain.tif");
+    const std::string terrain = had_terrain ? Slurp(out_ / "m_terrain.tif") : "";
     ASSERT_FALSE(cog.empty());
     const ChildResult r = Mosaic(inputs, out_, limit);
     EXPECT_EQ(r.status, 1) << r.message;
     EXPECT_NE(r.message.find((out_ / target).string()), std::string::npos) << r.message;
     EXPECT_TRUE(Same("m.tif", Slurp(out_ / "m.tif"), cog));
     EXPECT_TRUE(Same("m.json", Slurp(out_ / "m.json"), report));
+    if (had_terrain) EXPECT_TRUE(Same("m_terrain.tif", Slurp(out_ / "m_terrain.tif"), terrain));
     std::vector<std::string> left;  // the temporaries are .m.tif.staging-*, .m.tif.tmp-*, ...
     for (const auto& entry : fs::directory_iterator(out_))
       left.push_back(entry.path().filename().string());
     std::sort(left.begin(), left.end());
-    EXPECT_EQ(left, (std::vector<std::string>{"m.json", "m.tif"}));
+    std::vector<std::string> kept = {"m.json", "m.tif"};
+    if (had_terrain) kept.insert(kept.end(), {"m_terrain.png", "m_terrain.tif"});
+    EXPECT_EQ(left, kept);
     last_message_ = r.message;
   }
 

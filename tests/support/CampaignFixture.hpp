@@ -55,6 +55,7 @@ class CampaignFixture : public CommandFixture {
     return {"summary.json",
             "mosaic.tif",
             "mosaic.json",
+            "mosaic_terrain.tif",
             "config.yaml",
             "campaign.json",
             "traverses/000-a/dem.tif",
