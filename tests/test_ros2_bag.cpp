@@ -5,6 +5,8 @@
 // bags are IoErrors naming the file and, where it applies, the topic and the record.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "io/BagRules.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
 #include "io/Ros2Bag.hpp"
@@ -104,6 +107,20 @@ class Ros2Bag : public ::testing::Test {
 
   fs::path dir_;
 };
+
+TEST(BagStamp, IsTheDoubleItsDecimalTextReadsAs) {
+  // As a TUM file's 9-decimal stamp reads: an imported sequence's stamps are the bag's. The
+  // old sec + 1e-9 * nsec missed 0.3, 0.7, 1.7, 0.123456789 and 7.123456789 by an ulp.
+  for (const std::int64_t sec : {0, 1, 7, 1000, 1700000000}) {
+    for (const std::uint32_t nsec :
+         {0u, 1u, 123456789u, 300000000u, 333333333u, 500000001u, 700000000u, 999999999u}) {
+      const bag::Stamp stamp{sec, nsec};
+      const std::string text = bag::StampText(stamp);
+      EXPECT_EQ(stamp.ToSec(), std::strtod(text.c_str(), nullptr)) << text;
+    }
+  }
+  EXPECT_EQ((bag::Stamp{-1, 500000000}.ToSec()), -0.5);  // ROS 2's sec is signed
+}
 
 TEST_F(Ros2Bag, McapOfEveryLayoutYieldsTheSequenceDirectoryBitForBit) {
   struct Case {
