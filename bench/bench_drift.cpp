@@ -79,7 +79,8 @@ std::string FileName(std::string name) {
 void Dump(const fs::path& dir, const Sequence& seq, const std::string& name, const Poses& poses) {
   if (dir.empty()) return;
   std::vector<io::StampedPose> stamped;
-  for (std::size_t k = 0; k < poses.size(); ++k) stamped.push_back({seq.stamps[k], poses[k], 0});
+  for (std::size_t k = 0; k < poses.size(); ++k)
+    stamped.push_back({seq.stamps[k], poses[k], 0, {}});
   fs::create_directories(dir / FileName(seq.name));
   io::WriteTum(dir / FileName(seq.name) / (FileName(name) + ".tum"), stamped);
 }

@@ -1,8 +1,10 @@
 #include "io/BagRules.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -35,6 +37,22 @@ const TypeNames& Ros2Types() {
   return names;
 }
 
+double Stamp::ToSec() const {
+  const std::int64_t ns = sec * 1000000000 + nsec;
+  // Below 2^53 both are exact doubles: one division, rounded once, to the nearest.
+  if (std::llabs(ns) < (std::int64_t{1} << 53)) return static_cast<double>(ns) / 1e9;
+  // Beyond, the decimal text, read as ReadTum reads it.
+  const std::uint64_t magnitude =
+      ns < 0 ? 0 - static_cast<std::uint64_t>(ns) : static_cast<std::uint64_t>(ns);
+  char text[48];
+  const int length = std::snprintf(text, sizeof(text), "%s%llu.%09llu", ns < 0 ? "-" : "",
+                                   static_cast<unsigned long long>(magnitude / 1000000000),
+                                   static_cast<unsigned long long>(magnitude % 1000000000));
+  double t = 0.0;
+  std::from_chars(text, text + length, t);
+  return t;
+}
+
 std::string StampText(const Stamp& t) {
   char buffer[48];
   std::snprintf(buffer, sizeof(buffer), "%lld.%09u", static_cast<long long>(t.sec), t.nsec);
@@ -48,48 +66,51 @@ std::string FrameWhat(const std::filesystem::path& bag_file, const std::string& 
 
 namespace {
 
-struct PoseSample {
-  double t = 0.0;
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-};
-
 // tf names frames with or without a leading slash.
 std::string FrameName(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
 
-// @throw IoError naming `what` unless `q` is a unit quaternion (within 1e-3).
-Eigen::Isometry3d ToIsometry(const PoseValue& p, const std::string& what) {
+// The pose `p` at `stamp`: its rotation made from its quaternion, which it keeps, so that an
+// imported sequence's TUM files hold that very quaternion and read back to this rotation.
+// @throw IoError naming `what` unless the quaternion is a unit one (within 1e-3).
+StampedPose ToPose(const Stamp& stamp, const PoseValue& p, const std::string& what) {
   const Eigen::Quaterniond q(p.orientation[3], p.orientation[0], p.orientation[1],
                              p.orientation[2]);
   if (!(std::abs(q.norm() - 1.0) <= 1e-3)) {
     throw IoError(what + ": orientation is not a unit quaternion");
   }
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(p.position[0], p.position[1], p.position[2]);
-  T.linear() = RotationFromQuaternion(q);
-  return T;
+  StampedPose pose;
+  pose.timestamp = stamp.ToSec();
+  pose.T_world_body.translation() = Eigen::Vector3d(p.position[0], p.position[1], p.position[2]);
+  pose.T_world_body.linear() = RotationFromQuaternion(q);
+  pose.quaternion = q;
+  return pose;
 }
 
 // Position linearly, rotation by slerp, between the samples around `t` (within their span).
-Eigen::Isometry3d Interpolate(const std::vector<PoseSample>& samples, double t) {
+StampedPose Interpolate(const std::vector<StampedPose>& samples, double t) {
   auto after = std::upper_bound(samples.begin(), samples.end(), t,
-                                [](double v, const PoseSample& s) { return v < s.t; });
+                                [](double v, const StampedPose& s) { return v < s.timestamp; });
   if (after == samples.begin()) ++after;  // t is the first sample's time
-  const PoseSample& a = *(after - 1);
-  if (after == samples.end() || a.t == t) return a.T;
-  const PoseSample& b = *after;
-  const double alpha = (t - a.t) / (b.t - a.t);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = a.T.translation() + alpha * (b.T.translation() - a.T.translation());
-  const Eigen::Quaterniond qa(a.T.linear());
-  const Eigen::Quaterniond qb(b.T.linear());
-  T.linear() = qa.slerp(alpha, qb).normalized().toRotationMatrix();
-  return T;
+  const StampedPose& a = *(after - 1);
+  if (after == samples.end() || a.timestamp == t) return a;
+  const StampedPose& b = *after;
+  const double alpha = (t - a.timestamp) / (b.timestamp - a.timestamp);
+  StampedPose pose;
+  pose.timestamp = t;
+  pose.T_world_body.translation() =
+      a.T_world_body.translation() +
+      alpha * (b.T_world_body.translation() - a.T_world_body.translation());
+  const Eigen::Quaterniond qa(a.T_world_body.linear());
+  const Eigen::Quaterniond qb(b.T_world_body.linear());
+  pose.quaternion = qa.slerp(alpha, qb);
+  pose.T_world_body.linear() = RotationFromQuaternion(*pose.quaternion);
+  return pose;
 }
 
-bool Covers(const std::vector<PoseSample>& samples, double t) {
-  return !samples.empty() && t >= samples.front().t && t <= samples.back().t;
+bool Covers(const std::vector<StampedPose>& samples, double t) {
+  return !samples.empty() && t >= samples.front().timestamp && t <= samples.back().timestamp;
 }
 
 bool IsSupportedEncoding(const std::string& encoding) {
@@ -298,8 +319,8 @@ std::vector<std::pair<MessageRef, MessageRef>> PairImages(const std::vector<Mess
 struct BagContents::Collected {
   std::optional<CameraInfoMsg> left_info;
   std::optional<CameraInfoMsg> right_info;
-  std::vector<PoseSample> odom;   // by time
-  std::vector<PoseSample> truth;  // by time
+  std::vector<StampedPose> odom;   // by time
+  std::vector<StampedPose> truth;  // by time
   std::vector<StaticEdge> statics;
   std::set<std::string> tf_pairs;  // "parent -> child" on /tf other than the odometry's
   std::optional<GeodeticOrigin> fix;
@@ -417,13 +438,12 @@ void BagContents::AddTransforms(const std::string& topic,
   for (const TransformMsg& t : transforms) {
     const std::string parent = FrameName(t.parent);
     const std::string child = FrameName(t.child);
-    const Eigen::Isometry3d T = ToIsometry(t.transform, Where(topic, t.stamp));
+    const StampedPose T_parent_child = ToPose(t.stamp, t.transform, Where(topic, t.stamp));
     if (topic == kTfStaticTopic) {
-      const auto& r = t.transform.orientation;
       c_->statics.push_back(
-          {parent, child, T.translation(), Eigen::Quaterniond(r[3], r[0], r[1], r[2])});
+          {parent, child, T_parent_child.T_world_body.translation(), *T_parent_child.quaternion});
     } else if (parent == odom_parent && child == odom_child) {
-      c_->odom.push_back({t.stamp.ToSec(), T});
+      c_->odom.push_back(T_parent_child);
     } else {
       c_->tf_pairs.insert(parent + " -> " + child);
     }
@@ -431,13 +451,11 @@ void BagContents::AddTransforms(const std::string& topic,
 }
 
 void BagContents::AddOdometry(const PoseMsg& msg) {
-  c_->odom.push_back(
-      {msg.stamp.ToSec(), ToIsometry(msg.pose, Where(options_.odometry_topic, msg.stamp))});
+  c_->odom.push_back(ToPose(msg.stamp, msg.pose, Where(options_.odometry_topic, msg.stamp)));
 }
 
 void BagContents::AddGroundTruth(const PoseMsg& msg) {
-  c_->truth.push_back(
-      {msg.stamp.ToSec(), ToIsometry(msg.pose, Where(options_.groundtruth_topic, msg.stamp))});
+  c_->truth.push_back(ToPose(msg.stamp, msg.pose, Where(options_.groundtruth_topic, msg.stamp)));
 }
 
 void BagContents::AddNavSatFix(const NavSatFixMsg& msg) {
@@ -496,8 +514,8 @@ BagPlan PlanFrames(const Collected& c, const BagOptions& o, const std::string& n
       continue;
     }
     plan.frames.push_back(candidate);
-    plan.odometry.push_back({t, Interpolate(c.odom, t), 0});
-    if (has_truth) plan.groundtruth.push_back({t, Interpolate(c.truth, t), 0});
+    plan.odometry.push_back(Interpolate(c.odom, t));
+    if (has_truth) plan.groundtruth.push_back(Interpolate(c.truth, t));
   }
   if (plan.odometry.empty()) {
     const std::string what =
@@ -545,7 +563,9 @@ SequenceInfo Describe(const std::filesystem::path& bag_file, const Collected& c,
 
 BagPlan BagContents::Finish() {
   Collected& c = *c_;
-  auto by_time = [](const PoseSample& a, const PoseSample& b) { return a.t < b.t; };
+  auto by_time = [](const StampedPose& a, const StampedPose& b) {
+    return a.timestamp < b.timestamp;
+  };
   std::stable_sort(c.odom.begin(), c.odom.end(), by_time);
   std::stable_sort(c.truth.begin(), c.truth.end(), by_time);
   auto by_stamp = [](const MessageRef& a, const MessageRef& b) { return a.stamp < b.stamp; };

@@ -48,14 +48,18 @@ bag::CameraInfoMsg ToBag(const sensor_msgs::CameraInfo& m) {
   return info;
 }
 
+std::vector<bag::PointFieldMsg> ToBag(const std::vector<sensor_msgs::PointField>& fields) {
+  std::vector<bag::PointFieldMsg> out;
+  for (const sensor_msgs::PointField& f : fields) out.push_back({f.name, f.offset, f.datatype});
+  return out;
+}
+
 bag::PointCloudMsg ToBag(const sensor_msgs::PointCloud2& m) {
   bag::PointCloudMsg cloud;
   cloud.stamp = StampOf(m.header.stamp);
   cloud.height = m.height;
   cloud.width = m.width;
-  for (const sensor_msgs::PointField& f : m.fields) {
-    cloud.fields.push_back({f.name, f.offset, f.datatype});
-  }
+  cloud.fields = ToBag(m.fields);
   cloud.is_bigendian = m.is_bigendian != 0;
   cloud.point_step = m.point_step;
   cloud.row_step = m.row_step;
@@ -97,7 +101,94 @@ auto Instantiate(const rosbag::MessageInstance& m, const bag::BagContents& conte
   return msg;
 }
 
+// What opening needs of an Image, CompressedImage or PointCloud2: every field but the data,
+// whose length is kept (data.data null). rosbag deserialises it from the message's bytes as it
+// would a `Message` (same MD5 sum and type, below), but skipping over the data instead of
+// copying it.
+template <typename Message, typename Msg>
+struct Head {
+  Msg msg;
+};
+using ImageHead = Head<sensor_msgs::Image, bag::ImageMsg>;
+using CompressedImageHead = Head<sensor_msgs::CompressedImage, bag::CompressedImageMsg>;
+using CloudHead = Head<sensor_msgs::PointCloud2, bag::PointCloudMsg>;
+
+// The header's stamp (seq and frame_id read past).
+template <typename Stream>
+bag::Stamp ReadStamp(Stream& stream) {
+  std_msgs::Header header;
+  stream.next(header);
+  return StampOf(header.stamp);
+}
+
+// A uint8[]'s length, its bytes skipped: past the message's end that throws the
+// StreamOverrunException deserialising them would.
+template <typename Stream>
+bag::ByteView SkipData(Stream& stream) {
+  std::uint32_t length = 0;
+  stream.next(length);
+  stream.advance(length);
+  return {nullptr, length};
+}
+
+template <typename Stream>
+void ReadHead(Stream& stream, bag::ImageMsg* m) {
+  m->stamp = ReadStamp(stream);
+  std::uint8_t is_bigendian = 0;
+  stream.next(m->height);
+  stream.next(m->width);
+  stream.next(m->encoding);
+  stream.next(is_bigendian);
+  stream.next(m->step);
+  m->is_bigendian = is_bigendian != 0;
+  m->data = SkipData(stream);
+}
+
+template <typename Stream>
+void ReadHead(Stream& stream, bag::CompressedImageMsg* m) {
+  m->stamp = ReadStamp(stream);
+  stream.next(m->format);
+  m->data = SkipData(stream);
+}
+
+template <typename Stream>
+void ReadHead(Stream& stream, bag::PointCloudMsg* m) {
+  m->stamp = ReadStamp(stream);
+  std::vector<sensor_msgs::PointField> fields;
+  std::uint8_t is_bigendian = 0;
+  stream.next(m->height);
+  stream.next(m->width);
+  stream.next(fields);
+  stream.next(is_bigendian);
+  stream.next(m->point_step);
+  stream.next(m->row_step);
+  m->fields = ToBag(fields);
+  m->is_bigendian = is_bigendian != 0;
+  m->data = SkipData(stream);  // is_dense, after the data, is not read
+}
+
 }  // namespace
+}  // namespace rovermap::io
+
+namespace ros {
+namespace message_traits {
+template <typename Message, typename Msg>
+struct MD5Sum<rovermap::io::Head<Message, Msg>> : MD5Sum<Message> {};
+template <typename Message, typename Msg>
+struct DataType<rovermap::io::Head<Message, Msg>> : DataType<Message> {};
+}  // namespace message_traits
+namespace serialization {
+template <typename Message, typename Msg>
+struct Serializer<rovermap::io::Head<Message, Msg>> {
+  template <typename Stream>
+  static void read(Stream& stream, rovermap::io::Head<Message, Msg>& head) {
+    rovermap::io::ReadHead(stream, &head.msg);
+  }
+};
+}  // namespace serialization
+}  // namespace ros
+
+namespace rovermap::io {
 
 struct BagSource::Bag {
   rosbag::Bag bag;
@@ -137,18 +228,17 @@ std::map<std::string, std::string> TopicTypes(rosbag::Bag& bag) {
 void Add(const rosbag::MessageInstance& m, bag::BagContents& c, std::vector<ros::Time>* recorded) {
   const std::string& topic = m.getTopic();
   switch (c.RoleOf(topic)) {
+    // Images and clouds: their headers only; the data is deserialised when the frame is read.
     case Role::kImage:
-      // The whole image is deserialised once here, for its stamp and encoding; none is kept.
       if (m.getDataType() == bag::Ros1Types().compressed) {
-        c.AddImage(topic, ToBag(*Instantiate<sensor_msgs::CompressedImage>(m, c)),
-                   recorded->size());
+        c.AddImage(topic, Instantiate<CompressedImageHead>(m, c)->msg, recorded->size());
       } else {
-        c.AddImage(topic, ToBag(*Instantiate<sensor_msgs::Image>(m, c)), recorded->size());
+        c.AddImage(topic, Instantiate<ImageHead>(m, c)->msg, recorded->size());
       }
       recorded->push_back(m.getTime());
       break;
     case Role::kCloud:
-      c.AddCloud(ToBag(*Instantiate<sensor_msgs::PointCloud2>(m, c)), recorded->size());
+      c.AddCloud(Instantiate<CloudHead>(m, c)->msg, recorded->size());
       recorded->push_back(m.getTime());
       break;
     case Role::kCameraInfo:

@@ -20,7 +20,8 @@ namespace rovermap::io {
 ///
 /// Opening reads every message on the topics of `options` once: the camera info (fx, fy, cx,
 /// cy from the left projection P, baseline -P[0,3]/fx from the right one), the poses, and the
-/// header stamps of every image or cloud (checking encodings and point layouts). Frame k is the
+/// header stamps of every image or cloud (checking encodings and point layouts; their data is
+/// skipped over, not deserialised: an image is when its frame is read). Frame k is the
 /// k-th pair (by left stamp) or cloud that falls within the odometry's time span (and the
 /// ground truth's, when there is one); its timestamp is that stamp and its poses are
 /// interpolated there (position linearly, rotation by slerp). Images may be mono8, rgb8, bgr8

@@ -9,11 +9,16 @@ namespace rovermap::io::cdr {
 
 using bag::ByteView;
 
-CdrReader::CdrReader(ByteView data, std::string what) : data_(data), what_(std::move(what)) {
-  if (data_.size < 4) {
-    throw IoError(what_ + ": CDR data of " + std::to_string(data_.size) +
+CdrReader::CdrReader(ByteView data, std::string what)
+    : CdrReader(data, data.size, std::move(what)) {}
+
+CdrReader::CdrReader(ByteView head, std::size_t size, std::string what)
+    : data_(head), size_(size), what_(std::move(what)) {
+  if (size_ < 4) {
+    throw IoError(what_ + ": CDR data of " + std::to_string(size_) +
                   " bytes has no 4-byte encapsulation header");
   }
+  if (data_.size < 4) throw HeadTooShort();
   const std::uint8_t kind = data_.data[1];
   if (data_.data[0] != 0 || kind > 1) {
     throw IoError(what_ + ": encapsulation " + std::to_string(data_.data[0]) + " " +
@@ -23,14 +28,20 @@ CdrReader::CdrReader(ByteView data, std::string what) : data_(data), what_(std::
   little_ = kind == 1;
 }
 
-const std::uint8_t* CdrReader::Take(std::size_t size, std::size_t align, const char* field) {
+std::size_t CdrReader::Reserve(std::size_t size, std::size_t align, const char* field) {
   const std::size_t body = pos_ - 4;  // alignment counts from the end of the header
   const std::size_t start = pos_ + (align > 1 ? (align - body % align) % align : 0);
-  if (start > data_.size || size > data_.size - start) {
-    throw IoError(what_ + ": CDR data ends at byte " + std::to_string(data_.size) + ", '" + field +
+  if (start > size_ || size > size_ - start) {
+    throw IoError(what_ + ": CDR data ends at byte " + std::to_string(size_) + ", '" + field +
                   "' needs " + std::to_string(size) + " bytes at byte " + std::to_string(start));
   }
   pos_ = start + size;
+  return start;
+}
+
+const std::uint8_t* CdrReader::Take(std::size_t size, std::size_t align, const char* field) {
+  const std::size_t start = Reserve(size, align, field);
+  if (pos_ > data_.size) throw HeadTooShort();
   return data_.data + start;
 }
 
@@ -59,13 +70,14 @@ std::string CdrReader::String(const char* field) {
 
 ByteView CdrReader::Bytes(const char* field) {
   const std::uint32_t length = U32(field);
-  return {Take(length, 1, field), length};
+  const std::size_t start = Reserve(length, 1, field);
+  return {pos_ <= data_.size ? data_.data + start : nullptr, length};
 }
 
 std::uint32_t CdrReader::Count(const char* field, std::size_t min_size) {
   const std::uint32_t count = U32(field);
-  if (static_cast<std::size_t>(count) * min_size > data_.size - pos_) {
-    throw IoError(what_ + ": CDR data ends at byte " + std::to_string(data_.size) + ", '" + field +
+  if (static_cast<std::size_t>(count) * min_size > size_ - pos_) {
+    throw IoError(what_ + ": CDR data ends at byte " + std::to_string(size_) + ", '" + field +
                   "' declares " + std::to_string(count) + " elements at byte " +
                   std::to_string(pos_));
   }
@@ -98,10 +110,7 @@ bag::PoseValue ReadPose(CdrReader& r) {
   return pose;
 }
 
-}  // namespace
-
-bag::ImageMsg DecodeImage(ByteView data, const std::string& what) {
-  CdrReader r(data, what);
+bag::ImageMsg ImageFields(CdrReader& r) {
   bag::ImageMsg msg;
   msg.stamp = ReadHeader(r);
   msg.height = r.U32("height");
@@ -113,8 +122,7 @@ bag::ImageMsg DecodeImage(ByteView data, const std::string& what) {
   return msg;
 }
 
-bag::CompressedImageMsg DecodeCompressedImage(ByteView data, const std::string& what) {
-  CdrReader r(data, what);
+bag::CompressedImageMsg CompressedImageFields(CdrReader& r) {
   bag::CompressedImageMsg msg;
   msg.stamp = ReadHeader(r);
   msg.format = r.String("format");
@@ -122,22 +130,7 @@ bag::CompressedImageMsg DecodeCompressedImage(ByteView data, const std::string& 
   return msg;
 }
 
-bag::CameraInfoMsg DecodeCameraInfo(ByteView data, const std::string& what) {
-  CdrReader r(data, what);
-  bag::CameraInfoMsg msg;
-  ReadHeader(r);
-  msg.height = r.U32("height");
-  msg.width = r.U32("width");
-  r.String("distortion_model");
-  r.Skip(r.Count("d", 8), 8, "d");
-  r.Skip(9, 8, "k");
-  r.Skip(9, 8, "r");
-  for (double& v : msg.P) v = r.F64("p");
-  return msg;
-}
-
-bag::PointCloudMsg DecodePointCloud(ByteView data, const std::string& what) {
-  CdrReader r(data, what);
+bag::PointCloudMsg PointCloudFields(CdrReader& r) {
   bag::PointCloudMsg msg;
   msg.stamp = ReadHeader(r);
   msg.height = r.U32("height");
@@ -155,6 +148,69 @@ bag::PointCloudMsg DecodePointCloud(ByteView data, const std::string& what) {
   msg.point_step = r.U32("point_step");
   msg.row_step = r.U32("row_step");
   msg.data = r.Bytes("data");
+  return msg;
+}
+
+template <typename Msg>
+Msg Decode(ByteView data, const std::string& what, Msg (*fields)(CdrReader&)) {
+  CdrReader r(data, what);
+  return fields(r);
+}
+
+// `fields` of the first bytes `head` of a message of `size` bytes, the data's address left out.
+template <typename Msg>
+std::optional<Msg> DecodeHead(ByteView head, std::size_t size, const std::string& what,
+                              Msg (*fields)(CdrReader&)) {
+  try {
+    CdrReader r(head, size, what);
+    Msg msg = fields(r);
+    msg.data.data = nullptr;
+    return msg;
+  } catch (const HeadTooShort&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+bag::ImageMsg DecodeImage(ByteView data, const std::string& what) {
+  return Decode(data, what, &ImageFields);
+}
+
+bag::CompressedImageMsg DecodeCompressedImage(ByteView data, const std::string& what) {
+  return Decode(data, what, &CompressedImageFields);
+}
+
+bag::PointCloudMsg DecodePointCloud(ByteView data, const std::string& what) {
+  return Decode(data, what, &PointCloudFields);
+}
+
+std::optional<bag::ImageMsg> DecodeImageHead(ByteView head, std::size_t size,
+                                             const std::string& what) {
+  return DecodeHead(head, size, what, &ImageFields);
+}
+
+std::optional<bag::CompressedImageMsg> DecodeCompressedImageHead(ByteView head, std::size_t size,
+                                                                 const std::string& what) {
+  return DecodeHead(head, size, what, &CompressedImageFields);
+}
+
+std::optional<bag::PointCloudMsg> DecodePointCloudHead(ByteView head, std::size_t size,
+                                                       const std::string& what) {
+  return DecodeHead(head, size, what, &PointCloudFields);
+}
+
+bag::CameraInfoMsg DecodeCameraInfo(ByteView data, const std::string& what) {
+  CdrReader r(data, what);
+  bag::CameraInfoMsg msg;
+  ReadHeader(r);
+  msg.height = r.U32("height");
+  msg.width = r.U32("width");
+  r.String("distortion_model");
+  r.Skip(r.Count("d", 8), 8, "d");
+  r.Skip(9, 8, "k");
+  r.Skip(9, 8, "r");
+  for (double& v : msg.P) v = r.F64("p");
   return msg;
 }
 

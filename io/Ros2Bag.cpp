@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <system_error>
@@ -26,10 +27,14 @@ struct Stored {
   const std::string& topic;
   const std::string& type;      // "sensor_msgs/msg/Image"
   const std::string& encoding;  // "cdr"
-  bag::ByteView data;
+  bag::ByteView data;           // the message, or only its first bytes (see Storage::ForEach)
+  std::size_t size = 0;         // the message's
   std::uint64_t a = 0;
   std::uint64_t b = 0;
 };
+
+// What is read of an image or cloud at opening: enough for its header and layout, usually.
+constexpr std::size_t kHeadBytes = 1024;
 
 // One storage file of a bag: MCAP or SQLite.
 class Storage {
@@ -42,8 +47,10 @@ class Storage {
   const fs::path& file() const { return file_; }
   /// Each topic and its type (a topic's first channel when it has several).
   virtual std::map<std::string, std::string> Topics() const = 0;
-  /// Each message on `topics`, in file order (MCAP) or by timestamp (SQLite).
+  /// Each message on `topics`, in file order (MCAP) or by timestamp (SQLite). Those on
+  /// `head_topics` may come as their first kHeadBytes only, when that saves reading the rest.
   virtual void ForEach(const std::set<std::string>& topics,
+                       const std::set<std::string>& head_topics,
                        const std::function<void(const Stored&)>& visit) = 0;
   /// The data of the message at (a, b), valid during `use`.
   virtual void Read(std::uint64_t a, std::uint64_t b,
@@ -67,7 +74,8 @@ class McapStorage : public Storage {
     return types;
   }
 
-  void ForEach(const std::set<std::string>& topics,
+  // Whole messages: a chunk is read and decompressed whole anyway.
+  void ForEach(const std::set<std::string>& topics, const std::set<std::string>& /*head_topics*/,
                const std::function<void(const Stored&)>& visit) override {
     std::set<std::uint16_t> ids;
     for (const auto& [id, c] : reader_.channels()) {
@@ -75,7 +83,8 @@ class McapStorage : public Storage {
     }
     reader_.ForEachMessage(ids, [&](const mcap::Message& m) {
       const mcap::Channel& c = reader_.channels().at(m.channel_id);
-      visit({c.topic, c.schema_name, c.message_encoding, m.data, m.where.chunk, m.where.offset});
+      visit({c.topic, c.schema_name, c.message_encoding, m.data, m.data.size, m.where.chunk,
+             m.where.offset});
     });
   }
 
@@ -104,16 +113,21 @@ class SqliteStorage : public Storage {
     return types;
   }
 
-  void ForEach(const std::set<std::string>& topics,
+  void ForEach(const std::set<std::string>& topics, const std::set<std::string>& head_topics,
                const std::function<void(const Stored&)>& visit) override {
     std::set<std::int64_t> ids;
+    std::set<std::int64_t> head_ids;
     for (const ros2::SqliteTopic& t : bag_.topics()) {
       if (topics.count(t.name) != 0) ids.insert(t.id);
+      if (head_topics.count(t.name) != 0) head_ids.insert(t.id);
     }
-    bag_.ForEachMessage(ids, [&](std::int64_t id, std::int64_t topic_id, bag::ByteView data) {
-      const ros2::SqliteTopic& t = by_id_.at(topic_id);
-      visit({t.name, t.type, t.serialization_format, data, static_cast<std::uint64_t>(id), 0});
-    });
+    bag_.ForEachMessage(
+        ids, head_ids, kHeadBytes,
+        [&](std::int64_t id, std::int64_t topic_id, bag::ByteView data, std::size_t size) {
+          const ros2::SqliteTopic& t = by_id_.at(topic_id);
+          visit({t.name, t.type, t.serialization_format, data, size, static_cast<std::uint64_t>(id),
+                 0});
+        });
   }
 
   void Read(std::uint64_t a, std::uint64_t /*b*/,
@@ -151,9 +165,19 @@ std::string RecordWhat(const Storage& s, const std::string& topic, std::uint64_t
   return s.file().string() + ": " + topic + " (" + s.RecordText(a, b) + ")";
 }
 
-// Feeds one message to `c` by its role, decoding its CDR. @throw IoError naming the file, the
-// topic and the record.
-void Add(const Stored& m, std::size_t file, const Storage& s, bag::BagContents& c,
+// An image's or cloud's fields but its data, by `decode` (cdr::Decode*Head), from the bytes `m`
+// holds, else (only when they are part of it) from the whole message read again.
+template <typename Msg>
+Msg DecodeHead(const Stored& m, Storage& s, const std::string& what,
+               std::optional<Msg> (*decode)(bag::ByteView, std::size_t, const std::string&)) {
+  std::optional<Msg> msg = decode(m.data, m.size, what);
+  if (!msg) s.Read(m.a, m.b, [&](bag::ByteView data) { msg = decode(data, data.size, what); });
+  return *msg;
+}
+
+// Feeds one message to `c` by its role, decoding its CDR (an image or cloud's but its data).
+// @throw IoError naming the file, the topic and the record.
+void Add(const Stored& m, std::size_t file, Storage& s, bag::BagContents& c,
          std::vector<Ref>* refs) {
   const bag::TypeNames& types = bag::Ros2Types();
   const Role role = c.RoleOf(m.topic);
@@ -169,17 +193,17 @@ void Add(const Stored& m, std::size_t file, const Storage& s, bag::BagContents& 
     case Role::kImage: {
       const bool compressed = m.type == types.compressed;
       if (compressed) {
-        c.AddImage(m.topic, cdr::DecodeCompressedImage(m.data, what), refs->size());
+        c.AddImage(m.topic, DecodeHead(m, s, what, &cdr::DecodeCompressedImageHead), refs->size());
       } else {
         expect(types.image);
-        c.AddImage(m.topic, cdr::DecodeImage(m.data, what), refs->size());
+        c.AddImage(m.topic, DecodeHead(m, s, what, &cdr::DecodeImageHead), refs->size());
       }
       refs->push_back({file, m.a, m.b, compressed});
       break;
     }
     case Role::kCloud:
       expect(types.cloud);
-      c.AddCloud(cdr::DecodePointCloud(m.data, what), refs->size());
+      c.AddCloud(DecodeHead(m, s, what, &cdr::DecodePointCloudHead), refs->size());
       refs->push_back({file, m.a, m.b, false});
       break;
     case Role::kCameraInfo:
@@ -282,9 +306,15 @@ Ros2BagSource::Ros2BagSource(const fs::path& path, const BagOptions& options)
   }
   const std::vector<std::string> wanted = contents.TopicsToRead(types);
   const std::set<std::string> topics(wanted.begin(), wanted.end());
+  // Of images and clouds only the headers are read now; the data when their frame is.
+  std::set<std::string> heads;
+  for (const std::string& topic : wanted) {
+    const Role role = contents.RoleOf(topic);
+    if (role == Role::kImage || role == Role::kCloud) heads.insert(topic);
+  }
   for (std::size_t i = 0; i < bag_->files.size(); ++i) {
     Storage& s = *bag_->files[i];
-    s.ForEach(topics, [&](const Stored& m) { Add(m, i, s, contents, &bag_->refs); });
+    s.ForEach(topics, heads, [&](const Stored& m) { Add(m, i, s, contents, &bag_->refs); });
   }
   Adopt(contents.Finish());
 }

@@ -27,7 +27,8 @@ std::vector<std::filesystem::path> Ros2BagFiles(const std::filesystem::path& pat
 
 /// Opens a ROS 2 bag and finds its frames as BagSource does a ROS 1 bag; then Next() reads them
 /// in time order. Opening reads the header stamps of every image or cloud (decompressing the
-/// chunks that hold them); an image is decoded only when its frame is read.
+/// MCAP chunks that hold them; of a SQLite file's messages, their first bytes only); an image is
+/// read whole and decoded only when its frame is read.
 class Ros2BagSource : public bag::BagFrameSource {
  public:
   /// @throw IoError naming the file (and, where it applies, topic and record) if the bag cannot

@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <memory>
 #include <system_error>
 
@@ -60,21 +61,44 @@ SqliteBag::SqliteBag(const std::filesystem::path& file) : name_(file.string()) {
 
 SqliteBag::~SqliteBag() { sqlite3_close(db_); }
 
-void SqliteBag::ForEachMessage(
-    const std::set<std::int64_t>& topic_ids,
-    const std::function<void(std::int64_t, std::int64_t, bag::ByteView)>& visit) const {
+void SqliteBag::ForEachMessage(const std::set<std::int64_t>& topic_ids,
+                               const std::set<std::int64_t>& head_topic_ids, std::size_t head_bytes,
+                               const std::function<void(std::int64_t, std::int64_t, bag::ByteView,
+                                                        std::size_t)>& visit) const {
   if (topic_ids.empty()) return;
   std::string ids;
   for (const std::int64_t id : topic_ids) ids += (ids.empty() ? "" : ",") + std::to_string(id);
-  const Statement messages = Prepare(db_,
-                                     "SELECT id, topic_id, data FROM messages WHERE topic_id IN (" +
-                                         ids + ") ORDER BY timestamp, id",
-                                     name_);
+  // The rows only: each message's data is read through one blob handle moved from row to row.
+  const Statement messages =
+      Prepare(db_,
+              "SELECT rowid, id, topic_id FROM messages WHERE topic_id IN (" + ids +
+                  ") ORDER BY timestamp, id",
+              name_);
+  std::unique_ptr<sqlite3_blob, decltype(&sqlite3_blob_close)> blob(nullptr, &sqlite3_blob_close);
+  std::vector<std::uint8_t> data;
   while (Step(db_, messages.get(), name_)) {
-    const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(messages.get(), 2));
-    const auto size = static_cast<std::size_t>(sqlite3_column_bytes(messages.get(), 2));
-    visit(sqlite3_column_int64(messages.get(), 0), sqlite3_column_int64(messages.get(), 1),
-          {data, size});
+    const sqlite3_int64 row = sqlite3_column_int64(messages.get(), 0);
+    const std::int64_t id = sqlite3_column_int64(messages.get(), 1);
+    const std::int64_t topic_id = sqlite3_column_int64(messages.get(), 2);
+    int rc = SQLITE_OK;
+    if (blob) {
+      rc = sqlite3_blob_reopen(blob.get(), row);
+    } else {
+      sqlite3_blob* opened = nullptr;
+      rc = sqlite3_blob_open(db_, "main", "messages", "data", row, 0, &opened);
+      blob.reset(opened);
+    }
+    const auto size =
+        static_cast<std::size_t>(rc == SQLITE_OK ? sqlite3_blob_bytes(blob.get()) : 0);
+    data.resize(head_topic_ids.count(topic_id) != 0 ? std::min(size, head_bytes) : size);
+    if (rc == SQLITE_OK) {
+      rc = sqlite3_blob_read(blob.get(), data.data(), static_cast<int>(data.size()), 0);
+    }
+    if (rc != SQLITE_OK) {
+      throw IoError(name_ + ": message id " + std::to_string(id) + ": cannot read the database (" +
+                    sqlite3_errmsg(db_) + ")");
+    }
+    visit(id, topic_id, {data.data(), data.size()}, size);
   }
 }
 

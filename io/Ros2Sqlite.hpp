@@ -33,11 +33,15 @@ class SqliteBag {
 
   const std::vector<SqliteTopic>& topics() const { return topics_; }
 
-  /// Calls `visit(message id, topic id, data)` for each message on `topic_ids`, by timestamp.
-  /// @throw IoError naming the file if the database cannot be read (e.g. it is truncated).
+  /// Calls `visit(message id, topic id, data, size)` for each message on `topic_ids`, by
+  /// timestamp: `data` is the whole message of `size` bytes or, on `head_topic_ids`, at most its
+  /// first `head_bytes` (the rest is not read: incremental BLOB I/O), valid during the call.
+  /// @throw IoError naming the file (and the message) if the database cannot be read (e.g. it
+  ///        is truncated).
   void ForEachMessage(const std::set<std::int64_t>& topic_ids,
+                      const std::set<std::int64_t>& head_topic_ids, std::size_t head_bytes,
                       const std::function<void(std::int64_t id, std::int64_t topic_id,
-                                               bag::ByteView data)>& visit) const;
+                                               bag::ByteView data, std::size_t size)>& visit) const;
 
   /// The data of message `id`. @throw IoError naming the file and the message.
   std::vector<std::uint8_t> ReadMessage(std::int64_t id) const;

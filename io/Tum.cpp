@@ -8,11 +8,25 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/Rpy.hpp"
 
 namespace rovermap::io {
 namespace {
 
 bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// The quaternion to write for `pose`, qw >= 0 (negating a quaternion gives the same matrix, to
+// the bit: every term of it is a product of two components).
+Eigen::Quaterniond TumQuaternion(const StampedPose& pose) {
+  Eigen::Quaterniond q;
+  if (pose.quaternion && RotationFromQuaternion(*pose.quaternion) == pose.T_world_body.linear()) {
+    q = *pose.quaternion;
+  } else {
+    q = Eigen::Quaterniond(pose.T_world_body.linear()).normalized();
+  }
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  return q;
+}
 
 }  // namespace
 
@@ -71,9 +85,10 @@ std::vector<StampedPose> ParseTum(std::string_view text, const std::filesystem::
     }
     StampedPose pose;
     pose.timestamp = v[0];
-    pose.T_world_body.linear() = q.normalized().toRotationMatrix();
+    pose.T_world_body.linear() = RotationFromQuaternion(q);
     pose.T_world_body.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
     pose.line = line_number;
+    pose.quaternion = q;
     poses.push_back(pose);
   }
   return poses;
@@ -83,9 +98,7 @@ void WriteTum(const std::filesystem::path& path, const std::vector<StampedPose>&
   std::string text = "# timestamp tx ty tz qx qy qz qw\n";
   char buffer[512];
   for (const StampedPose& pose : poses) {
-    Eigen::Quaterniond q(pose.T_world_body.linear());
-    q.normalize();
-    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    const Eigen::Quaterniond q = TumQuaternion(pose);
     const Eigen::Vector3d& t = pose.T_world_body.translation();
     std::snprintf(buffer, sizeof(buffer), "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
                   pose.timestamp, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -13,6 +14,10 @@ struct StampedPose {
   double timestamp = 0.0;  ///< [s]
   Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
   int line = 0;  ///< 1-based line in the file it was read from (0 if not read)
+  /// The quaternion T_world_body's rotation was made from (RotationFromQuaternion), when it was
+  /// (a TUM line, a bag's pose): WriteTum writes it as it is, so that the file reads back to this
+  /// very rotation (a quaternion recomputed from the matrix can differ in its last bit).
+  std::optional<Eigen::Quaterniond> quaternion;
 };
 
 /// The poses of `stamped`, without their stamps.
@@ -34,7 +39,9 @@ std::vector<StampedPose> ReadTum(const std::filesystem::path& path);
 /// @throw IoError "PATH:LINE: reason" as ReadTum.
 std::vector<StampedPose> ParseTum(std::string_view text, const std::filesystem::path& path);
 
-/// Writes a TUM file (full double precision, quaternions normalised, qw >= 0), atomically.
+/// Writes a TUM file (full double precision, qw >= 0), atomically: each pose's `quaternion` as it
+/// is while it still gives T_world_body's rotation, else one normalised from the matrix (so a
+/// pose read by ReadTum is written with the quaternion it was read with).
 /// @throw IoError if it cannot be written.
 void WriteTum(const std::filesystem::path& path, const std::vector<StampedPose>& poses);
 

@@ -83,8 +83,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   io::PreviewTrajectory odometry_xy{"dead reckoning", {230, 60, 40}, {}};
   io::PreviewTrajectory registered_xy{"registered", {255, 255, 255}, {}};
   for (const FrameResult& r : results) {
-    trajectory.push_back({r.timestamp, r.step.T_world_body, 0});
-    odometry.push_back({r.timestamp, r.step.T_world_body_odom, 0});
+    trajectory.push_back({r.timestamp, r.step.T_world_body, 0, {}});
+    odometry.push_back({r.timestamp, r.step.T_world_body_odom, 0, {}});
     registered_xy.points.push_back(r.step.T_world_body.translation());
     odometry_xy.points.push_back(r.step.T_world_body_odom.translation());
     if (r.T_world_body_truth) truth_xy.points.push_back(r.T_world_body_truth->translation());

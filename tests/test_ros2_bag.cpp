@@ -5,13 +5,19 @@
 // bags are IoErrors naming the file and, where it applies, the topic and the record.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "io/BagRules.hpp"
+#include "io/Cdr.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
 #include "io/Ros2Bag.hpp"
@@ -104,6 +110,61 @@ class Ros2Bag : public ::testing::Test {
 
   fs::path dir_;
 };
+
+TEST(BagStamp, IsTheDoubleItsDecimalTextReadsAs) {
+  // As a TUM file's 9-decimal stamp reads: an imported sequence's stamps are the bag's. The
+  // old sec + 1e-9 * nsec missed 0.3, 0.7, 1.7, 0.123456789 and 7.123456789 by an ulp.
+  for (const std::int64_t sec : {0, 1, 7, 1000, 1700000000}) {
+    for (const std::uint32_t nsec :
+         {0u, 1u, 123456789u, 300000000u, 333333333u, 500000001u, 700000000u, 999999999u}) {
+      const bag::Stamp stamp{sec, nsec};
+      const std::string text = bag::StampText(stamp);
+      EXPECT_EQ(stamp.ToSec(), std::strtod(text.c_str(), nullptr)) << text;
+    }
+  }
+  EXPECT_EQ((bag::Stamp{-1, 500000000}.ToSec()), -0.5);  // ROS 2's sec is signed
+}
+
+TEST(CdrHead, GivesTheFieldsButTheDataFromTheFirstBytesAndChecksLengthsAgainstTheWhole) {
+  const cv::Mat grey(120, 160, CV_8UC1, cv::Scalar(7));
+  for (const bool big_endian : {false, true}) {
+    SCOPED_TRACE(big_endian ? "big-endian" : "little-endian");
+    const rovermap::testing::Cdr cdr{big_endian};
+    const Bytes image = cdr.Image(grey, "bgr8", 1.5);
+    const bag::ByteView whole{image.data(), image.size()};
+    const bag::ImageMsg want = cdr::DecodeImage(whole, "image");
+    const std::optional<bag::ImageMsg> got =
+        cdr::DecodeImageHead({image.data(), 64}, image.size(), "image");
+    ASSERT_TRUE(got);
+    EXPECT_EQ(got->stamp, want.stamp);
+    EXPECT_EQ(got->encoding, "bgr8");
+    EXPECT_EQ(got->width, want.width);
+    EXPECT_EQ(got->step, want.step);
+    EXPECT_EQ(got->data.size, want.data.size);
+    EXPECT_EQ(got->data.data, nullptr);
+    // Cut inside the encoding: read more. A whole message shorter than its data: the error the
+    // whole decoding gives.
+    EXPECT_FALSE(cdr::DecodeImageHead({image.data(), 30}, image.size(), "image"));
+    const std::string error = ErrorOf([&] {
+      cdr::DecodeImageHead({image.data(), 64}, image.size() - 1, "image");
+    });
+    EXPECT_EQ(error, ErrorOf([&] { cdr::DecodeImage({image.data(), image.size() - 1}, "image"); }));
+    EXPECT_TRUE(Contains(error, "'data' needs")) << error;
+
+    registration::PointCloud points;
+    points.points.assign(5, Eigen::Vector3d(1.0, 2.0, 3.0));
+    const Bytes cloud = cdr.PointCloud(points, true, 2.0);
+    EXPECT_FALSE(cdr::DecodePointCloudHead({cloud.data(), 40}, cloud.size(), "cloud"));
+    const std::optional<bag::PointCloudMsg> head =
+        cdr::DecodePointCloudHead({cloud.data(), cloud.size()}, cloud.size(), "cloud");
+    ASSERT_TRUE(head);
+    const bag::PointCloudMsg whole_cloud = cdr::DecodePointCloud({cloud.data(), cloud.size()}, "");
+    ASSERT_EQ(head->fields.size(), whole_cloud.fields.size());
+    EXPECT_EQ(head->fields.back().name, whole_cloud.fields.back().name);
+    EXPECT_EQ(head->point_step, whole_cloud.point_step);
+    EXPECT_EQ(head->data.size, 5u * head->point_step);
+  }
+}
 
 TEST_F(Ros2Bag, McapOfEveryLayoutYieldsTheSequenceDirectoryBitForBit) {
   struct Case {
@@ -222,6 +283,39 @@ TEST_F(Ros2Bag, ImagesAreDecodedWhenTheirFrameIsReadNotAtOpening) {
   EXPECT_TRUE(Contains(error, file.string() + ": /stereo/left/image_rect at 1.000000000"));
   EXPECT_TRUE(Contains(error, "cannot decode"));
   EXPECT_NO_THROW(source.Read(1));
+}
+
+TEST_F(Ros2Bag, SqliteOpeningReadsOnlyTheHeadersOfImages) {
+  // Frame 2's left image is raw, its pixels 0xA5, stored over overflow pages of their own;
+  // one of those pages then points past the end of the file. Opening reads each image's first
+  // bytes only (stamp, encoding, size) and passes; reading frame 2 meets the broken page.
+  Ros2Recording how;
+  int left_images = 0;
+  how.edit = [&](const std::string& topic, Bytes* data) {
+    if (topic == "/stereo/left/image_rect" && left_images++ == 2) {
+      std::fill(data->end() - 160 * 120, data->end(), std::uint8_t{0xA5});
+    }
+  };
+  const fs::path file = Write("lazy.db3", how);
+  std::string bytes = rovermap::testing::Slurp(file);
+  const std::size_t page = (static_cast<std::uint8_t>(bytes[16]) << 8) |
+                           static_cast<std::uint8_t>(bytes[17]);  // 4096 by default
+  std::size_t last = 0;  // the last overflow page of pixels that has a next one
+  for (std::size_t at = 0; at + page <= bytes.size(); at += page) {
+    const bool pixels = bytes.find_first_not_of('\xA5', at + 4) >= at + page;
+    if (pixels && bytes.substr(at, 4) != std::string(4, '\0')) last = at;
+  }
+  ASSERT_NE(last, 0u);
+  bytes.replace(last, 4, "\x7F\xFF\xFF\xF0");  // its next page: past the end
+  std::ofstream(file, std::ios::binary) << bytes;
+
+  Ros2BagSource source(file, Options());
+  ASSERT_EQ(source.frame_count(), 3u);
+  EXPECT_NO_THROW(source.Read(0));
+  EXPECT_NO_THROW(source.Read(1));
+  const std::string error = ErrorOf([&] { source.Read(2); });
+  EXPECT_TRUE(Contains(error, file.string() + ": message id ")) << error;
+  EXPECT_TRUE(Contains(error, "cannot read the database")) << error;
 }
 
 TEST_F(Ros2Bag, BadContainersAreIoErrorsNamingTheFileAndRecord) {

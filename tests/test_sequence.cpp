@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/Rpy.hpp"
@@ -164,6 +165,37 @@ TEST(Sequence, TumRoundTrip) {
   EXPECT_EQ(back[1].line, 3);
   EXPECT_DOUBLE_EQ(back[1].timestamp, 2.5);
   EXPECT_TRUE(back[1].T_world_body.isApprox(poses[1].T_world_body, 1e-12));
+}
+
+// A TUM file keeps each pose's quaternion as it was made from (a bag's, a TUM line's), so that
+// it reads back to the same matrix, to the bit; a stale one (the matrix changed since) is not
+// written, nor is qw < 0.
+TEST(Sequence, TumKeepsEachPosesQuaternionToTheBit) {
+  const fs::path file = rovermap::testing::ScratchDir() / "rovermap_test_quaternions.tum";
+  std::srand(11);
+  std::vector<StampedPose> poses(200);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Quaterniond q = Eigen::Quaterniond(Eigen::Vector4d::Random()).normalized();
+    poses[i].timestamp = static_cast<double>(i);
+    poses[i].T_world_body.linear() = RotationFromQuaternion(q);
+    poses[i].quaternion = q;
+  }
+  WriteTum(file, poses);
+  std::vector<StampedPose> back = ReadTum(file);
+  ASSERT_EQ(back.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_TRUE(back[i].T_world_body.linear() == poses[i].T_world_body.linear()) << i;
+    const Eigen::Quaterniond& q = *poses[i].quaternion;
+    EXPECT_EQ(back[i].quaternion->coeffs(), (q.w() < 0 ? -q.coeffs() : q.coeffs()).eval()) << i;
+  }
+  // Read and written again: the same file.
+  const std::string text = ReadWholeFile(file);
+  WriteTum(file, back);
+  EXPECT_EQ(ReadWholeFile(file), text);
+
+  back[0].T_world_body.linear() = Eigen::Matrix3d::Identity();  // its quaternion now stale
+  WriteTum(file, back);
+  EXPECT_TRUE(ReadTum(file)[0].T_world_body.linear() == Eigen::Matrix3d::Identity());
 }
 
 // sequence.yaml keeps T_body_sensor's rotation as a quaternion: the one it was made from

@@ -110,14 +110,28 @@ struct CdrDecoder {
   const char* type;
   void (*decode)(io::bag::ByteView data);
 };
+
+// An image's or cloud's head decoder (what opening a SQLite bag reads) on the first half of the
+// buffer, then the whole decoder on all of it. (The head's errors are the whole's.)
+template <typename Head, typename Whole>
+void HeadThenWhole(io::bag::ByteView d, Head head, Whole whole) {
+  head(io::bag::ByteView{d.data, d.size / 2}, d.size, "fuzz");
+  whole(d, "fuzz");
+}
+
 inline const CdrDecoder kCdrDecoders[] = {
-    {"sensor_msgs/msg/Image", [](io::bag::ByteView d) { io::cdr::DecodeImage(d, "fuzz"); }},
+    {"sensor_msgs/msg/Image",
+     [](io::bag::ByteView d) { HeadThenWhole(d, io::cdr::DecodeImageHead, io::cdr::DecodeImage); }},
     {"sensor_msgs/msg/CompressedImage",
-     [](io::bag::ByteView d) { io::cdr::DecodeCompressedImage(d, "fuzz"); }},
+     [](io::bag::ByteView d) {
+       HeadThenWhole(d, io::cdr::DecodeCompressedImageHead, io::cdr::DecodeCompressedImage);
+     }},
     {"sensor_msgs/msg/CameraInfo",
      [](io::bag::ByteView d) { io::cdr::DecodeCameraInfo(d, "fuzz"); }},
     {"sensor_msgs/msg/PointCloud2",
-     [](io::bag::ByteView d) { io::cdr::DecodePointCloud(d, "fuzz"); }},
+     [](io::bag::ByteView d) {
+       HeadThenWhole(d, io::cdr::DecodePointCloudHead, io::cdr::DecodePointCloud);
+     }},
     {"nav_msgs/msg/Odometry", [](io::bag::ByteView d) { io::cdr::DecodeOdometry(d, "fuzz"); }},
     {"geometry_msgs/msg/PoseStamped",
      [](io::bag::ByteView d) { io::cdr::DecodePoseStamped(d, "fuzz"); }},
