@@ -34,19 +34,29 @@ namespace {
 // Bytes allocated with operator new in this executable: what opening a bag copies. (Allocation
 // only counted; malloc does the work, so the sanitizers still see every block.)
 std::atomic<std::size_t> g_new_bytes{0};
+
+void* CountedMalloc(std::size_t size) {
+  g_new_bytes.fetch_add(size, std::memory_order_relaxed);
+  return std::malloc(size == 0 ? 1 : size);
+}
 }  // namespace
 
-// GCC takes this operator new for its own when it inlines the delete below and calls the free()
-// a mismatch (-Wmismatched-new-delete); here both are malloc's.
+// Every operator new and delete whose block the others may free (the sanitizers' own would
+// otherwise pair with these: std::stable_sort's nothrow new with the sized delete). GCC takes
+// operator new for its own when it inlines a delete and calls the free() a mismatch
+// (-Wmismatched-new-delete); here both are malloc's.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 void* operator new(std::size_t size) {
-  g_new_bytes.fetch_add(size, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  if (void* p = CountedMalloc(size)) return p;
   throw std::bad_alloc();
+}
+void* operator new(std::size_t size, const std::nothrow_t& /*tag*/) noexcept {
+  return CountedMalloc(size);
 }
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t /*size*/) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t& /*tag*/) noexcept { std::free(p); }
 #pragma GCC diagnostic pop
 
 namespace rovermap::io {
