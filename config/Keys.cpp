@@ -265,7 +265,8 @@ std::vector<KeyEntry> BuildRegistry() {
   dem_keys.Bool("attitude_error_shared", &D::attitude_error_shared,
                 "the pose's roll and pitch error does not average out over a cell's frames");
   dem_keys.Int("clear_min_rays", &D::clear_min_rays, "count", AtLeast(0),
-               "a published cell seen through by this many rays of one frame is emptied; 0 = off");
+               "a frame with this many rays under a published cell saw through it; the cell is "
+               "emptied once more frames saw through it than saw it; 0 = off");
   dem_keys.Double("clear_margin_m", &D::clear_margin_m, "m", AtLeast(0),
                   "seen through: the cell lies above the ray by this + 3 sigma");
   dem_keys.Int("clear_ray_spacing_cells", &D::clear_ray_spacing_cells, "cells", AtLeast(1),

@@ -18,6 +18,13 @@ namespace {
   throw std::invalid_argument(msg.str());
 }
 
+// A cell's seen frames when they were not counted one by one (a candidate that took over, a
+// restored tile): no more than its points, nor than the frames first_frame .. frame.
+CellEvidence SeenSince(const CellValue& v, std::uint32_t frame) {
+  const std::uint64_t frames = frame >= v.first_frame ? frame - v.first_frame + 1ull : 1ull;
+  return {static_cast<std::uint8_t>(std::min<std::uint64_t>({frames, v.count, 255})), 0};
+}
+
 // Kalman update of a constant height observed directly (H = 1).
 void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
   const double h = *height_m;
@@ -73,7 +80,8 @@ void Validate(const ElevationMapOptions& options) {
 }
 
 Tile::Tile(int tile_cells)
-    : cells(static_cast<std::size_t>(tile_cells) * static_cast<std::size_t>(tile_cells)) {}
+    : cells(static_cast<std::size_t>(tile_cells) * static_cast<std::size_t>(tile_cells)),
+      evidence(cells.size()) {}
 
 ElevationMap::ElevationMap(const ElevationMapOptions& options)
     : options_(options),
@@ -111,15 +119,28 @@ Tile& ElevationMap::TileFor(TileIndex tile_index, FusionStats* stats) {
   return *slot;
 }
 
-void ElevationMap::RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells) {
+void ElevationMap::RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells,
+                               std::vector<CellEvidence> evidence) {
   const auto n = static_cast<std::size_t>(options_.tile_cells);
   if (cells.size() != n * n) {
     throw std::invalid_argument("ElevationMap::RestoreTile: " + std::to_string(cells.size()) +
                                 " cells, a tile holds " + std::to_string(n * n));
   }
+  if (!evidence.empty() && evidence.size() != cells.size()) {
+    throw std::invalid_argument("ElevationMap::RestoreTile: " + std::to_string(evidence.size()) +
+                                " cells' evidence, a tile holds " + std::to_string(n * n));
+  }
   auto tile = std::make_unique<Tile>(0);
   tile->cells = std::move(cells);
-  for (const CellRecord& record : tile->cells) tile->filled += record.value.count > 0 ? 1 : 0;
+  const bool derive = evidence.empty();
+  tile->evidence = std::move(evidence);
+  tile->evidence.resize(tile->cells.size());
+  for (std::size_t i = 0; i < tile->cells.size(); ++i) {
+    const CellValue& v = tile->cells[i].value;
+    if (v.count == 0) continue;
+    ++tile->filled;
+    if (derive) tile->evidence[i] = SeenSince(v, v.last_frame);
+  }
   cache_ = TileCache{};
   tiles_[tile_index] = std::move(tile);
 }
@@ -240,13 +261,16 @@ bool ElevationMap::CandidateTakesOver(const CellRecord& record) const {
 bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, std::uint32_t frame,
                           FusionStats* stats, double shared_m2) {
   Tile& tile = TileFor(index_.CellToTile(cell), stats);
-  CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
+  const std::size_t at = index_.LinearIndex(index_.CellToLocal(cell));
+  CellRecord& record = tile.cells[at];
   CellValue& v = record.value;
   CellCandidate& c = record.candidate;
+  CellEvidence& e = tile.evidence[at];
   const auto zf = static_cast<float>(z);
   const auto rf = static_cast<float>(r_update);
   if (v.count == 0) {
     v = {zf, rf, zf, zf, 1, frame, frame, rf};
+    e = {1, 0};
     ++tile.filled;
     bounds_.Extend(cell);
     if (stats != nullptr) ++stats->fused;
@@ -257,6 +281,8 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
     KalmanUpdate(&v.elevation_m, &v.fused_variance_m2, z, r_update);
     v.variance_m2 = PublishedVariance(v.fused_variance_m2, v.variance_m2, shared_m2);
     ++v.count;
+    // A frame that sees the surface again outweighs the frames that saw through it before.
+    if (v.last_frame != frame) e = {static_cast<std::uint8_t>(std::min(255, e.seen_frames + 1)), 0};
     v.last_frame = frame;
     if (stats != nullptr) ++stats->fused;
   } else if (c.count > 0 && WithinGate(c.height_m, c.variance_m2, z, r)) {
@@ -273,6 +299,8 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
       std::swap(v.count, c.count);
       std::swap(v.first_frame, c.start_frame);
       v.last_frame = frame;
+      // The candidate's frames were not counted: its points and its frames bound them.
+      e = SeenSince(v, frame);
       if (stats != nullptr) ++stats->swapped;
     }
   } else if (c.count <= 1) {  // a lone point is no evidence to keep: the newer one replaces it
@@ -487,8 +515,10 @@ void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m
                            std::optional<std::uint32_t> count, std::uint32_t frame) {
   const std::uint32_t n = count.value_or(static_cast<std::uint32_t>(options_.min_support));
   Tile& tile = TileFor(index_.CellToTile(cell), nullptr);
-  CellRecord& record = tile.cells[index_.LinearIndex(index_.CellToLocal(cell))];
+  const std::size_t at = index_.LinearIndex(index_.CellToLocal(cell));
+  CellRecord& record = tile.cells[at];
   const bool was_filled = record.value.count > 0;
+  tile.evidence[at] = CellEvidence{};
   if (!std::isfinite(elevation_m) || n == 0) {
     record = CellRecord{};
     if (was_filled) --tile.filled;
@@ -499,6 +529,7 @@ void ElevationMap::SetCell(CellIndex cell, double elevation_m, double variance_m
   const auto span = static_cast<std::uint32_t>(options_.min_frame_span - 1);
   record.value = {zf,    static_cast<float>(variance_m2), zf, zf, n, frame + span,
                   frame, static_cast<float>(variance_m2)};
+  tile.evidence[at] = SeenSince(record.value, record.value.last_frame);
   if (!was_filled) ++tile.filled;
   bounds_.Extend(cell);
 }
@@ -595,7 +626,7 @@ std::size_t ElevationMap::PublishedCellCount() const {
 std::size_t ElevationMap::MemoryBytes() const {
   const auto cells =
       static_cast<std::size_t>(options_.tile_cells) * static_cast<std::size_t>(options_.tile_cells);
-  return tiles_.size() * (sizeof(Tile) + cells * sizeof(CellRecord));
+  return tiles_.size() * (sizeof(Tile) + cells * (sizeof(CellRecord) + sizeof(CellEvidence)));
 }
 
 }  // namespace rovermap::dem

@@ -102,8 +102,9 @@ struct ElevationMapOptions {
   /// Visibility clearing (ElevationMap::ClearSeenThrough): a published surface that a later
   /// frame's rays pass under, toward points it saw beyond, is no longer there (a person, a car
   /// or another rover that moved away): the cell is emptied for later frames to fill. A cell
-  /// is seen through when the ray's height above it is lower than its height by more than
-  /// clear_margin_m + 3σ, by at least clear_min_rays rays of one frame. 0 rays = off.
+  /// is seen through by a frame when at least clear_min_rays of its rays pass below its height
+  /// by more than clear_margin_m + 3σ, and emptied once more frames saw through it since it was
+  /// last seen than saw it (CellEvidence). 0 rays = off.
   int clear_min_rays = 1;
   double clear_margin_m = 0.1;  ///< [m] beyond the cell's 3σ: the pose's and the ray's error
   /// [cells] the rays are cast to one point per square of this many cells (the frame's first
@@ -166,12 +167,20 @@ struct CellRecord {
 };
 static_assert(sizeof(CellRecord) == 48, "CellRecord: keep the layout compact (see above)");
 
+/// A cell's evidence for visibility clearing, counted in frames (saturating at 255): kept beside
+/// the records, 2 bytes a cell, so that CellRecord keeps its layout.
+struct CellEvidence {
+  std::uint8_t seen_frames = 0;     ///< frames that fused a point into the primary
+  std::uint8_t through_frames = 0;  ///< frames that saw through it since it was last seen
+};
+
 /// Storage of one tile: tile_cells² records, row-major, rows south to north
 /// (GridIndex::LinearIndex).
 struct Tile {
   explicit Tile(int tile_cells);
   std::vector<CellRecord> cells;
-  std::size_t filled = 0;  ///< cells with count > 0
+  std::vector<CellEvidence> evidence;  ///< one per cell, as `cells`
+  std::size_t filled = 0;              ///< cells with count > 0
 };
 
 /// What FuseFrame did with the points it was given: points = fused + candidate + swapped +
@@ -259,8 +268,9 @@ class ElevationMap {
   /// Visibility clearing after a frame is fused (options' clear_*): rays from `sensor_world` to
   /// the frame's points (`part`, moved into the world by `T_world_points`; one point per
   /// clear_ray_spacing_cells square) are walked over the grid; a published cell this frame did
-  /// not update whose height lies above a ray by more than clear_margin_m + 3σ counts that ray,
-  /// and with clear_min_rays such rays the cell is emptied. Depth errors do not matter: they
+  /// not update whose height lies above a ray by more than clear_margin_m + 3σ counts that ray;
+  /// with clear_min_rays such rays the frame saw through it, and the cell is emptied once more
+  /// frames saw through it than saw it (CellEvidence). Depth errors do not matter: they
   /// move a point along its ray, not the ray. Never throws.
   ClearingStats ClearSeenThrough(const Eigen::Isometry3d& T_world_points, const FramePart& part,
                                  const Eigen::Vector3d& sensor_world, std::uint32_t frame);
@@ -347,9 +357,11 @@ class ElevationMap {
   /// Bytes held by the tiles' layers (not the hash table overhead).
   std::size_t MemoryBytes() const;
   /// Restoring a saved map (service/Checkpoint): replaces the tile at `tile_index` by `cells`
-  /// (tile_cells² records as Tile stores them; its filled count is recounted).
-  /// @throw std::invalid_argument if `cells` has the wrong size.
-  void RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells);
+  /// (tile_cells² records as Tile stores them; its filled count is recounted) and `evidence`
+  /// (as many, or none: then each cell's seen frames are bounded by its points and frames).
+  /// @throw std::invalid_argument if `cells` or `evidence` has the wrong size.
+  void RestoreTile(TileIndex tile_index, std::vector<CellRecord> cells,
+                   std::vector<CellEvidence> evidence = {});
   /// ...and the counters that FuseFrame keeps beside the tiles.
   void RestoreCounters(const CellBounds& bounds, std::size_t covariances_ignored);
 

@@ -95,15 +95,24 @@ ClearingStats ElevationMap::ClearSeenThrough(const Eigen::Isometry3d& T_world_po
       if (v->elevation_m - ray_z > limit) ++hits[Key(cx, cy)];
     }
   }
+  // Evidence accumulates over frames, as in an occupancy map: a frame with clear_min_rays such
+  // rays saw through the cell, and the cell goes once more frames saw through it since it was
+  // last seen than saw it. A thing that moved away is no longer seen and goes; a crown or a
+  // parked car seen in many frames and seen through by a few rays of some stays.
   for (const auto& [key, count] : hits) {
     if (count < static_cast<std::uint32_t>(options_.clear_min_rays)) continue;
     const CellIndex c{static_cast<std::int32_t>(key >> 32),
                       static_cast<std::int32_t>(key & 0xffffffffu)};
     const auto it = tiles_.find(index_.CellToTile(c));
     if (it == tiles_.end()) continue;
-    CellRecord& record = it->second->cells[index_.LinearIndex(index_.CellToLocal(c))];
+    const std::size_t at = index_.LinearIndex(index_.CellToLocal(c));
+    CellRecord& record = it->second->cells[at];
     if (record.value.Empty()) continue;
+    CellEvidence& evidence = it->second->evidence[at];
+    if (evidence.through_frames < 255) ++evidence.through_frames;
+    if (evidence.through_frames <= evidence.seen_frames) continue;
     record = CellRecord{};
+    evidence = CellEvidence{};
     --it->second->filled;
     ++stats.cells_cleared;
   }

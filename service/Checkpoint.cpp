@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '7'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '8'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
@@ -327,14 +327,17 @@ struct CheckpointAccess {
       w->Put(t);
       std::vector<std::uint32_t> where;
       std::vector<dem::CellRecord> records;
+      std::vector<dem::CellEvidence> evidence;
       for (std::size_t i = 0; i < tile->cells.size(); ++i) {
         const dem::CellRecord& c = tile->cells[i];
         if (c.value.count == 0 && c.candidate.count == 0) continue;
         where.push_back(static_cast<std::uint32_t>(i));
         records.push_back(c);
+        evidence.push_back(tile->evidence[i]);
       }
       PutVector(w, where);
       PutVector(w, records);
+      PutVector(w, evidence);
     }
     std::ostringstream octomap(std::ios::out | std::ios::binary);
     if (!m.octomap_.Fusion().Save(octomap)) throw CheckpointError("cannot serialise the OctoMap");
@@ -392,13 +395,16 @@ struct CheckpointAccess {
       const auto t = r->Get<dem::TileIndex>();
       const std::vector<std::uint32_t> where = GetVector<std::uint32_t>(r);
       const std::vector<dem::CellRecord> records = GetVector<dem::CellRecord>(r);
-      if (where.size() != records.size()) r->Fail();
+      const std::vector<dem::CellEvidence> evidence = GetVector<dem::CellEvidence>(r);
+      if (where.size() != records.size() || where.size() != evidence.size()) r->Fail();
       std::vector<dem::CellRecord> cells(cells_per_tile);
+      std::vector<dem::CellEvidence> cells_evidence(cells_per_tile);
       for (std::size_t i = 0; i < where.size(); ++i) {
         if (where[i] >= cells.size()) r->Fail();
         cells[where[i]] = records[i];
+        cells_evidence[where[i]] = evidence[i];
       }
-      map.RestoreTile(t, std::move(cells));
+      map.RestoreTile(t, std::move(cells), std::move(cells_evidence));
     }
     std::istringstream octomap(r->String(), std::ios::in | std::ios::binary);
     try {

@@ -1016,12 +1016,12 @@ TEST(ElevationMap, FramePartsFuseAsTheirPointsMovedAndConcatenated) {
 // ---- visibility clearing -----------------------------------------------------------------
 
 // A sensor 1.5 m above flat ground at (sx, sy) looks along +x at ground points out to 8 m,
-// every 2.5 cm; with `box`, a 0.6 m high box (x 2–2.5 m, |y| < 0.25 m) stands on the ground and
-// hides what lies in its shadow.
-std::vector<Eigen::Vector3d> GroundView(bool box, double sx, double sy) {
+// every `step` (2.5 cm); with `box`, a 0.6 m high box (x 2–2.5 m, |y| < 0.25 m) stands on the
+// ground and hides what lies in its shadow.
+std::vector<Eigen::Vector3d> GroundView(bool box, double sx, double sy, double step = 0.025) {
   std::vector<Eigen::Vector3d> points;
-  for (double x = sx + 0.5; x < sx + 8.0; x += 0.025) {
-    for (double y = -1.0; y < 1.0; y += 0.025) {
+  for (double x = sx + 0.5; x < sx + 8.0; x += step) {
+    for (double y = -1.0; y < 1.0; y += step) {
       const bool on_box = x >= 2.0 && x < 2.5 && std::abs(y) < 0.25;
       if (box && !on_box) {
         // Hidden when the ray from the sensor to the ground point passes under the box's top.
@@ -1038,10 +1038,10 @@ std::vector<Eigen::Vector3d> GroundView(bool box, double sx, double sy) {
 TEST(VisibilityClearing, AnObjectThatMovedAwayIsClearedAndOneThatStaysIsKept) {
   ElevationMapOptions options;
   options.min_frame_span = 1;
-  const auto fuse = [&](ElevationMap* map, bool box, std::uint32_t frame) {
+  const auto fuse = [&](ElevationMap* map, bool box, std::uint32_t frame, double step = 0.025) {
     // The rover backs away 10 cm a frame, weaving.
     const Eigen::Vector3d sensor(-0.1 * frame, 0.1 * std::sin(frame), 1.5);
-    const std::vector<Eigen::Vector3d> points = GroundView(box, sensor.x(), sensor.y());
+    const std::vector<Eigen::Vector3d> points = GroundView(box, sensor.x(), sensor.y(), step);
     FrameContext ctx;
     ctx.frame = frame;
     ctx.sensor_origin_world = sensor;
@@ -1058,31 +1058,40 @@ TEST(VisibilityClearing, AnObjectThatMovedAwayIsClearedAndOneThatStaysIsKept) {
     return high;
   };
 
-  // Three frames with the box, then two without. The two-hypothesis fusion would put the ground
-  // back only once the ground's points outnumber the box's in a cell (not yet: the map without
-  // clearing still has the box); the rays that pass under the box's top empty its cells now.
+  // Three frames with the box, then views without it that see the ground it stood on more
+  // sparsely (5 cm: one point a cell, the box gave four). The two-hypothesis fusion would put
+  // the ground back only once the ground's points outnumber the box's in a cell (not after eight
+  // views: the map without clearing still has the box); a cell is emptied once more frames saw
+  // through it (rays passing under the box's top) than saw it: four at least.
   ElevationMap moved(options);
   for (std::uint32_t f = 0; f < 3; ++f) EXPECT_EQ(fuse(&moved, true, f).cells_cleared, 0u);
   ASSERT_GE(box_cells(moved), 90);  // 10 × 10 cells
   std::size_t cleared = 0;
-  for (std::uint32_t f = 3; f < 5; ++f) {
-    const ClearingStats stats = fuse(&moved, false, f);
+  for (std::uint32_t f = 3; f < 11; ++f) {
+    const ClearingStats stats = fuse(&moved, false, f, 0.05);
     EXPECT_GT(stats.rays, 100u);
     cleared += stats.cells_cleared;
+    std::printf(
+        "visibility clearing: view %u without the box: %zu cells cleared, %d of the box's "
+        "cells left\n",
+        f - 2, cleared, box_cells(moved));
+    if (f == 5) {
+      EXPECT_GE(box_cells(moved), 90);  // three views: no more than saw it
+    }
   }
-  std::printf("visibility clearing: %zu cells cleared, %d of the box's cells left\n", cleared,
-              box_cells(moved));
-  // Measured: 22 cells cleared, 70 of the 100 left (rays go to one point per 40 cm square,
-  // dem.clear_ray_spacing_cells; the next views clear more, and the ground's points then win).
+  // Measured: none cleared in views 1–6 (a cell is crossed by a qualifying ray in only some
+  // views: rays go to one point per 40 cm square, dem.clear_ray_spacing_cells), 9 in view 7,
+  // 18 by view 8, and 56 of the 100 left (the emptied cells and their neighbours take the
+  // ground's points).
   EXPECT_GE(cleared, 15u);
-  EXPECT_LE(box_cells(moved), 80);
+  EXPECT_LE(box_cells(moved), 70);
 
-  // Off: the box stays in the map after those two frames.
+  // Off: the box stays in the map after those eight frames.
   options.clear_min_rays = 0;
   ElevationMap off(options);
   for (std::uint32_t f = 0; f < 3; ++f) fuse(&off, true, f);
-  for (std::uint32_t f = 3; f < 5; ++f) EXPECT_EQ(fuse(&off, false, f).rays, 0u);
-  EXPECT_GE(box_cells(off), 90);
+  for (std::uint32_t f = 3; f < 11; ++f) EXPECT_EQ(fuse(&off, false, f, 0.05).rays, 0u);
+  EXPECT_GE(box_cells(off), 80);  // measured 82: the fusion alone put the ground back in 14
 
   // The box that stays: every frame sees it, nothing is cleared.
   options.clear_min_rays = ElevationMapOptions{}.clear_min_rays;
@@ -1091,6 +1100,35 @@ TEST(VisibilityClearing, AnObjectThatMovedAwayIsClearedAndOneThatStaysIsKept) {
   for (std::uint32_t f = 0; f < 9; ++f) cleared_static += fuse(&stays, true, f).cells_cleared;
   EXPECT_EQ(cleared_static, 0u);
   EXPECT_GE(box_cells(stays), 90);
+}
+
+// A thing seen in many frames and seen through by the rays of a few (a crown's gaps, a parked
+// car's windows: docs/maps.md, "Visibility clearing") stays: one frame's rays emptied it before.
+TEST(VisibilityClearing, AThingSeenInManyFramesAndSeenThroughByAFewStays) {
+  ElevationMapOptions options;
+  options.min_frame_span = 1;
+  ElevationMap map(options);
+  std::size_t cleared = 0;
+  for (std::uint32_t f = 0; f < 9; ++f) {
+    const Eigen::Vector3d sensor(-0.1 * f, 0.1 * std::sin(f), 1.5);
+    // Frames 6 and 7 see the ground behind and under the box, not the box.
+    const bool box = f < 6 || f == 8;
+    const std::vector<Eigen::Vector3d> points = GroundView(box, sensor.x(), sensor.y(), 0.05);
+    FrameContext ctx;
+    ctx.frame = f;
+    ctx.sensor_origin_world = sensor;
+    map.FuseFrame(points,
+                  std::vector<Eigen::Matrix3d>(points.size(), Eigen::Matrix3d::Identity() * 1e-4),
+                  ctx);
+    cleared += map.ClearSeenThrough(Eigen::Isometry3d::Identity(),
+                                    {&points, nullptr, nullptr, nullptr}, sensor, f)
+                   .cells_cleared;
+  }
+  EXPECT_EQ(cleared, 0u);
+  int high = 0;
+  for (double x = 2.025; x < 2.5; x += 0.05)
+    for (double y = -0.225; y < 0.25; y += 0.05) high += map.HeightAt(x, y) > 0.3;
+  EXPECT_GE(high, 90);
 }
 
 }  // namespace
