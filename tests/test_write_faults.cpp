@@ -402,7 +402,9 @@ class MosaicFault : public WriteFaults {
     EXPECT_NE(r.message.find((out_ / target).string()), std::string::npos) << r.message;
     EXPECT_TRUE(Same("m.tif", Slurp(out_ / "m.tif"), cog));
     EXPECT_TRUE(Same("m.json", Slurp(out_ / "m.json"), report));
-    if (had_terrain) EXPECT_TRUE(Same("m_terrain.tif", Slurp(out_ / "m_terrain.tif"), terrain));
+    if (had_terrain) {
+      EXPECT_TRUE(Same("m_terrain.tif", Slurp(out_ / "m_terrain.tif"), terrain));
+    }
     std::vector<std::string> left;  // the temporaries are .m.tif.staging-*, .m.tif.tmp-*, ...
     for (const auto& entry : fs::directory_iterator(out_))
       left.push_back(entry.path().filename().string());
