@@ -147,6 +147,16 @@ GeoTiffInfo WriteTerrainGeoTiff(const std::filesystem::path& path, const RasterF
 
 namespace {
 
+// A band's nodata value (when it has one other than NaN) read as NaN.
+void NoDataToNaN(GDALRasterBand& band, std::vector<float>* values) {
+  int has_nodata = 0;
+  const double nodata = band.GetNoDataValue(&has_nodata);
+  if (has_nodata == 0 || std::isnan(nodata)) return;
+  for (float& v : *values) {
+    if (v == static_cast<float>(nodata)) v = std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
 // One band of `path` read whole but decimated (GDAL's nearest) to width × height.
 std::vector<float> ReadDecimated(const std::filesystem::path& path, int band, int width,
                                  int height) {
@@ -158,13 +168,7 @@ std::vector<float> ReadDecimated(const std::filesystem::path& path, int band, in
                   height, GDT_Float32, 0, 0, nullptr) != CE_None) {
     throw IoError(path.string() + ": cannot read band " + std::to_string(band) + QuietGdal::Last());
   }
-  int has_nodata = 0;
-  const double nodata = b->GetNoDataValue(&has_nodata);
-  if (has_nodata != 0 && !std::isnan(nodata)) {
-    for (float& v : out) {
-      if (v == static_cast<float>(nodata)) v = std::numeric_limits<float>::quiet_NaN();
-    }
-  }
+  NoDataToNaN(*b, &out);
   return out;
 }
 
@@ -260,14 +264,7 @@ TiledTerrain WriteTerrainTiled(const std::filesystem::path& dem, const std::file
                                        result.width, rows, GDT_Float32, 0, 0, nullptr) != CE_None) {
       throw IoError(file + ": cannot read rows " + std::to_string(row0) + QuietGdal::Last());
     }
-    // The DEM's own nodata value reads as no height.
-    int has_nodata = 0;
-    const double nodata = ds->GetRasterBand(1)->GetNoDataValue(&has_nodata);
-    if (has_nodata != 0 && !std::isnan(nodata)) {
-      for (float& v : *z) {
-        if (v == static_cast<float>(nodata)) v = std::numeric_limits<float>::quiet_NaN();
-      }
-    }
+    NoDataToNaN(*ds->GetRasterBand(1), z);  // the DEM's own nodata value: no height
     if (s != nullptr) {
       s->resize(cells);
       if (sigma_band->RasterIO(GF_Read, 0, row0, result.width, rows, s->data(), result.width, rows,

@@ -104,9 +104,8 @@ const TerrainLayers& TerrainCache::Update(const GridView& grid, const TerrainOpt
   TerrainLayers& out = in_place ? layers_ : spare_;
   if (!in_place) {
     const std::size_t cells = static_cast<std::size_t>(grid.width) * grid.height;
-    for (auto* layer : {&out.slope_deg, &out.slope_sigma_deg, &out.roughness_m, &out.step_m,
-                        &out.traversability, &out.uncertain}) {
-      layer->assign(cells, std::numeric_limits<float>::quiet_NaN());
+    for (const auto layer : kLayerFields) {
+      (out.*layer).assign(cells, std::numeric_limits<float>::quiet_NaN());
     }
     out.width = grid.width;
     out.height = grid.height;
@@ -119,9 +118,6 @@ const TerrainLayers& TerrainCache::Update(const GridView& grid, const TerrainOpt
   const Placed before{
       origin_row_, origin_col_,         height_,
       width_,      elevation_m_.data(), stddev_m_.empty() ? nullptr : stddev_m_.data()};
-  const std::array<std::vector<float> TerrainLayers::*, 6> kLayers = {
-      &TerrainLayers::slope_deg, &TerrainLayers::slope_sigma_deg, &TerrainLayers::roughness_m,
-      &TerrainLayers::step_m,    &TerrainLayers::traversability,  &TerrainLayers::uncertain};
 
   const int tiles_x = static_cast<int>(layout.cols.size());
   const int tiles = static_cast<int>(layout.rows.size()) * tiles_x;
@@ -136,7 +132,7 @@ const TerrainLayers& TerrainCache::Update(const GridView& grid, const TerrainOpt
     if (reusable && before.Holds(r0, r1, c0, c1) &&
         SameCells(now, before, r0 - layout.hy, r1 + layout.hy, c0 - layout.hx, c1 + layout.hx)) {
       if (in_place) continue;
-      for (const auto layer : kLayers) {
+      for (const auto layer : kLayerFields) {
         for (std::int64_t r = r0; r < r1; ++r) {
           const std::size_t src = static_cast<std::size_t>(r - origin_row_) * width_ +
                                   static_cast<std::size_t>(c0 - origin_col_);
@@ -148,7 +144,7 @@ const TerrainLayers& TerrainCache::Update(const GridView& grid, const TerrainOpt
       continue;
     }
     if (in_place) {  // the tile's cells as EmptyLayers leaves them: ComputeTile skips unknowns
-      for (const auto layer : kLayers) {
+      for (const auto layer : kLayerFields) {
         for (int r = rows.begin; r < rows.end; ++r) {
           std::fill_n((out.*layer).data() + static_cast<std::size_t>(r) * grid.width + cols.begin,
                       cols.end - cols.begin, std::numeric_limits<float>::quiet_NaN());

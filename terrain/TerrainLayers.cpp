@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <limits>
 #include <opencv2/imgproc.hpp>
-#include <utility>
 
 #include "terrain/TerrainTiles.hpp"
 
@@ -200,10 +199,7 @@ TerrainLayers EmptyLayers(const GridView& g, const TileLayout& layout) {
   out.footprint_cols = 2 * layout.hx + 1;
   out.footprint_rows = 2 * layout.hy + 1;
   const std::size_t cells = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height);
-  for (auto* layer : {&out.slope_deg, &out.slope_sigma_deg, &out.roughness_m, &out.step_m,
-                      &out.traversability, &out.uncertain}) {
-    layer->assign(cells, kNaN);
-  }
+  for (const auto layer : kLayerFields) (out.*layer).assign(cells, kNaN);
   return out;
 }
 
@@ -351,13 +347,8 @@ TerrainLayers ComputeTerrainByRows(const GridShape& shape, const TerrainOptions&
     out.footprint_rows = total.footprint_rows;
     const std::size_t first = static_cast<std::size_t>(local.begin) * shape.width;
     const std::size_t count = static_cast<std::size_t>(out.height) * shape.width;
-    for (auto [to, from] :
-         {std::pair{&out.slope_deg, &layers.slope_deg},
-          std::pair{&out.slope_sigma_deg, &layers.slope_sigma_deg},
-          std::pair{&out.roughness_m, &layers.roughness_m}, std::pair{&out.step_m, &layers.step_m},
-          std::pair{&out.traversability, &layers.traversability},
-          std::pair{&out.uncertain, &layers.uncertain}}) {
-      to->assign(from->begin() + first, from->begin() + first + count);
+    for (const auto layer : kLayerFields) {
+      (out.*layer).assign((layers.*layer).begin() + first, (layers.*layer).begin() + first + count);
     }
     CountLayers(o, &out);
     total.known += out.known;

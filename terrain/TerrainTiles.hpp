@@ -2,6 +2,7 @@
 // The tiles ComputeTerrain and TerrainCache share: the footprint's half-sizes, the tiles'
 // spans (aligned to the map's global cell grid) and the work on one tile. Internal to terrain/.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -15,6 +16,11 @@ struct TileSpan {
   int end = 0;
   std::int64_t index = 0;
 };
+
+/// The six layers of TerrainLayers, in terrain.tif's band order.
+inline constexpr std::array<std::vector<float> TerrainLayers::*, 6> kLayerFields = {
+    &TerrainLayers::slope_deg, &TerrainLayers::slope_sigma_deg, &TerrainLayers::roughness_m,
+    &TerrainLayers::step_m,    &TerrainLayers::traversability,  &TerrainLayers::uncertain};
 
 struct TileLayout {
   int hx = 0;                                   ///< [cells] footprint half-width along a row
