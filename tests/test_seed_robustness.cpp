@@ -142,12 +142,11 @@ TEST(SeedRobustness, SimulatedTraverse) {
 
 // Real stereo: the bundled KITTI excerpt's first 20 frames (24 m at 1.2 m a frame, so 0.8°/m
 // is a degree of heading error in every seed), each bias once, both scale errors.
+// Under the sanitizers Mapper.KittiRealStereoBeatsDeadReckoningAndKeepsTheRoadFlat runs the same
+// frames through the same code, and SeedRobustness.SimulatedTraverse the study's own.
 TEST(SeedRobustness, KittiStereo) {
+  if (kSanitizedBuild) GTEST_SKIP() << "statistics only: the Release suite checks them";
   const mapper::PreloadedSequence seq = mapper::Preload(
       std::filesystem::path(ROVERMAP_DATASETS_DIR) / "kitti_stereo51", Defaults(), 20);
-  if (kSanitizedBuild) {
-    ExpectSeedIndependent(seq, {Model(0.8, 0.03, 3)});
-  } else {
-    ExpectSeedIndependent(seq, {Model(0.2, 0.03, 1), Model(0.4, 0.10, 2), Model(0.8, 0.03, 3)});
-  }
+  ExpectSeedIndependent(seq, {Model(0.2, 0.03, 1), Model(0.4, 0.10, 2), Model(0.8, 0.03, 3)});
 }

@@ -1,0 +1,305 @@
+#include "graph/PoseGraph.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace rovermap::graph {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Upper-triangular L with LᵀL = Σ⁻¹ (the whitening of a residual), eigenvalues of Σ floored at
+// `floor_variance`: a direction given as exact still weighs finitely.
+template <int N>
+Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& covariance,
+                                            const Eigen::Matrix<double, N, 1>& floor_variance) {
+  const Eigen::Matrix<double, N, N> floor = floor_variance.asDiagonal();
+  const Eigen::Matrix<double, N, N> sym = 0.5 * (covariance + covariance.transpose()) + floor;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(sym);
+  const Eigen::Matrix<double, N, 1> values =
+      eig.eigenvalues().cwiseMax(floor_variance.minCoeff());
+  // Σ⁻¹ = V diag(1/λ) Vᵀ; its Cholesky factor's transpose whitens.
+  const Eigen::Matrix<double, N, N> information =
+      eig.eigenvectors() * values.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  return Eigen::LLT<Eigen::Matrix<double, N, N>>(information).matrixU();
+}
+
+template <int N>
+void CheckCovariance(const Eigen::Matrix<double, N, N>& c, const std::string& what) {
+  if (!c.allFinite()) throw std::invalid_argument(what + ": covariance is not finite");
+  if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(1.0, c.cwiseAbs().maxCoeff()))
+    throw std::invalid_argument(what + ": covariance is not symmetric");
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(c);
+  if (eig.eigenvalues().minCoeff() < -1e-9 * std::max(1.0, eig.eigenvalues().maxCoeff()))
+    throw std::invalid_argument(what + ": covariance is not positive semi-definite");
+}
+
+// A node: rotation as Eigen's quaternion (x, y, z, w in memory) and translation.
+struct Node {
+  double q[4];
+  double t[3];
+};
+
+Node ToNode(const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  return {{q.x(), q.y(), q.z(), q.w()}, {T.translation().x(), T.translation().y(),
+                                         T.translation().z()}};
+}
+
+Eigen::Isometry3d FromNode(const Node& n) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(n.q[3], n.q[0], n.q[1], n.q[2]).normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(n.t[0], n.t[1], n.t[2]);
+  return T;
+}
+
+// [log(R_D); t_D] of D = T_est ∘ T_meas⁻¹: the left perturbation that takes the measurement to
+// the estimate, in the measurement's reference frame.
+template <typename T>
+void LeftError(const Eigen::Quaternion<T>& q_est, const Eigen::Matrix<T, 3, 1>& t_est,
+               const Eigen::Quaterniond& q_meas, const Eigen::Vector3d& t_meas, T* e) {
+  const Eigen::Quaternion<T> q_d = q_est * q_meas.conjugate().cast<T>();
+  const Eigen::Matrix<T, 3, 1> t_d = t_est - q_d * t_meas.cast<T>();
+  const T wxyz[4] = {q_d.w(), q_d.x(), q_d.y(), q_d.z()};
+  ceres::QuaternionToAngleAxis(wxyz, e);
+  e[3] = t_d.x();
+  e[4] = t_d.y();
+  e[5] = t_d.z();
+}
+
+// Relative factor: T_est = T_i⁻¹ T_j against the measured increment.
+struct RelativeCost {
+  Eigen::Quaterniond q_meas;
+  Eigen::Vector3d t_meas;
+  Matrix6d sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* qi, const T* ti, const T* qj, const T* tj, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Qi(qi), Qj(qj);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ti(ti), Tj(tj);
+    const Eigen::Quaternion<T> q_est = Qi.conjugate() * Qj;
+    const Eigen::Matrix<T, 3, 1> t_est = Qi.conjugate() * (Tj - Ti);
+    Eigen::Matrix<T, 6, 1> e;
+    LeftError(q_est, t_est, q_meas, t_meas, e.data());
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = sqrt_information.cast<T>() * e;
+    return true;
+  }
+};
+
+// Prior on a node's whole pose, in the world frame.
+struct PriorCost {
+  Eigen::Quaterniond q_meas;
+  Eigen::Vector3d t_meas;
+  Matrix6d sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* q, const T* t, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Q(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Tt(t);
+    Eigen::Matrix<T, 6, 1> e;
+    LeftError(Eigen::Quaternion<T>(Q), Eigen::Matrix<T, 3, 1>(Tt), q_meas, t_meas, e.data());
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = sqrt_information.cast<T>() * e;
+    return true;
+  }
+};
+
+// Position fix of the node's point `lever` (body frame).
+struct PositionCost {
+  Eigen::Vector3d position;
+  Eigen::Vector3d lever;
+  Eigen::Matrix3d sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* q, const T* t, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Q(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Tt(t);
+    const Eigen::Matrix<T, 3, 1> e = Tt + Q * lever.cast<T>() - position.cast<T>();
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> out(residual);
+    out = sqrt_information.cast<T>() * e;
+    return true;
+  }
+};
+
+double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
+               const Eigen::Isometry3d& T) {
+  return (sqrt_information * (T * f.lever_arm_body - f.position_world)).squaredNorm();
+}
+
+}  // namespace
+
+void Validate(const PoseGraphOptions& o) {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string("graph.") + name + " must be > 0");
+  };
+  positive(o.fix_huber_sigmas, "fix_huber_sigmas");
+  positive(o.fix_gate_chi2, "fix_gate_chi2");
+  positive(o.first_pose_sigma_deg, "first_pose_sigma_deg");
+  positive(o.first_pose_sigma_m, "first_pose_sigma_m");
+  positive(o.min_increment_sigma_rad, "min_increment_sigma_rad");
+  positive(o.min_increment_sigma_m, "min_increment_sigma_m");
+  if (o.max_gate_rounds < 1) throw std::invalid_argument("graph.max_gate_rounds must be >= 1");
+  if (o.max_iterations < 1) throw std::invalid_argument("graph.max_iterations must be >= 1");
+}
+
+PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
+                               const std::vector<RelativeFactor>& relative,
+                               const std::vector<PositionFactor>& positions,
+                               const PoseGraphOptions& options) {
+  Validate(options);
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n = initial.size();
+  for (std::size_t k = 0; k < relative.size(); ++k) {
+    const RelativeFactor& f = relative[k];
+    const std::string what = "relative factor " + std::to_string(k);
+    if (f.from >= n || f.to >= n || f.from == f.to)
+      throw std::invalid_argument(what + ": nodes " + std::to_string(f.from) + ", " +
+                                  std::to_string(f.to) + " of " + std::to_string(n));
+    CheckCovariance<6>(f.covariance, what);
+  }
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const PositionFactor& f = positions[k];
+    const std::string what = "position factor " + std::to_string(k);
+    if (f.node >= n)
+      throw std::invalid_argument(what + ": node " + std::to_string(f.node) + " of " +
+                                  std::to_string(n));
+    if (!f.position_world.allFinite() || !f.lever_arm_body.allFinite())
+      throw std::invalid_argument(what + ": position is not finite");
+    CheckCovariance<3>(f.covariance, what);
+  }
+
+  PoseGraphResult result;
+  result.T_world_body = initial;
+  result.fix_used.assign(positions.size(), false);
+  result.fix_chi2.assign(positions.size(), 0.0);
+  if (positions.empty() || n == 0) {
+    result.message = "no position factor: the chained trajectory is kept";
+    return result;
+  }
+
+  Eigen::Matrix<double, 6, 1> increment_floor;
+  increment_floor << Eigen::Vector3d::Constant(std::pow(options.min_increment_sigma_rad, 2)),
+      Eigen::Vector3d::Constant(std::pow(options.min_increment_sigma_m, 2));
+  std::vector<Matrix6d> relative_L(relative.size());
+  for (std::size_t k = 0; k < relative.size(); ++k)
+    relative_L[k] = SqrtInformation<6>(relative[k].covariance, increment_floor);
+  std::vector<Eigen::Matrix3d> fix_L(positions.size());
+  for (std::size_t k = 0; k < positions.size(); ++k)
+    fix_L[k] = SqrtInformation<3>(positions[k].covariance, Eigen::Vector3d::Constant(1e-12));
+  Matrix6d prior_L = Matrix6d::Zero();
+  prior_L.diagonal() << Eigen::Vector3d::Constant(1.0 / (options.first_pose_sigma_deg * kDegToRad)),
+      Eigen::Vector3d::Constant(1.0 / options.first_pose_sigma_m);
+
+  std::vector<bool> use(positions.size(), true);
+  std::vector<Node> nodes;
+  for (int round = 0; round < options.max_gate_rounds; ++round) {
+    // The first round starts from the chained trajectory, the others from the last solution
+    // (the optimum without the rejected fixes is near it).
+    nodes.clear();
+    for (const Eigen::Isometry3d& T : result.T_world_body) nodes.push_back(ToNode(T));
+    ceres::Problem problem;
+    for (Node& node : nodes) {
+      problem.AddParameterBlock(node.q, 4, new ceres::EigenQuaternionManifold);
+      problem.AddParameterBlock(node.t, 3);
+    }
+    const Node first = ToNode(initial.front());
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost{
+            Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
+            initial.front().translation(), prior_L}),
+        nullptr, nodes.front().q, nodes.front().t);
+    for (std::size_t k = 0; k < relative.size(); ++k) {
+      const RelativeFactor& f = relative[k];
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(new RelativeCost{
+              Eigen::Quaterniond(f.T_from_to.linear()).normalized(), f.T_from_to.translation(),
+              relative_L[k]}),
+          nullptr, nodes[f.from].q, nodes[f.from].t, nodes[f.to].q, nodes[f.to].t);
+    }
+    std::size_t used = 0;
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      if (!use[k]) continue;
+      const PositionFactor& f = positions[k];
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3>(
+              new PositionCost{f.position_world, f.lever_arm_body, fix_L[k]}),
+          new ceres::HuberLoss(options.fix_huber_sigmas), nodes[f.node].q, nodes[f.node].t);
+      ++used;
+    }
+    if (used == 0) {
+      result.message = "every position fix was rejected: the chained trajectory is kept";
+      result.T_world_body = initial;
+      result.fixes_rejected = positions.size();
+      result.solved = false;
+      break;
+    }
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    solver.max_num_iterations = options.max_iterations;
+    // Tighter than Ceres's defaults (1e-6): a long chain's cost falls slowly near the optimum
+    // while its far end still moves by centimetres.
+    solver.function_tolerance = 1e-12;
+    solver.gradient_tolerance = 1e-14;
+    solver.parameter_tolerance = 1e-12;
+    solver.num_threads = 1;
+    solver.logging_type = ceres::SILENT;
+    solver.minimizer_progress_to_stdout = false;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    ++result.solves;
+    result.iterations += static_cast<int>(summary.iterations.size());
+    result.final_cost = summary.final_cost;
+    if (!summary.IsSolutionUsable()) {
+      result.message = "the solver failed: " + summary.message;
+      result.T_world_body = initial;
+      result.solved = false;
+      break;
+    }
+    for (std::size_t k = 0; k < n; ++k) result.T_world_body[k] = FromNode(nodes[k]);
+    result.solved = true;
+    result.message = summary.message;
+    // The gate, worst first: the fixes over the bound whose residual is at least half the
+    // worst one's (in σ) leave, and the rest is solved again. A gross outlier bends its
+    // neighbours' residuals too; once it is gone they come back within the bound, so they
+    // wait for the next round instead of leaving with it. The last round's solution is
+    // final, so its fixes are the ones used.
+    bool changed = false;
+    const bool last_round = round + 1 == options.max_gate_rounds;
+    double worst = 0.0;
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      result.fix_chi2[k] =
+          FixChi2(positions[k], fix_L[k], result.T_world_body[positions[k].node]);
+      if (use[k]) worst = std::max(worst, result.fix_chi2[k]);
+    }
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      if (!last_round && use[k] && result.fix_chi2[k] > options.fix_gate_chi2 &&
+          result.fix_chi2[k] >= 0.25 * worst) {
+        use[k] = false;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  result.fixes_used = 0;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    result.fix_used[k] = result.solved && use[k];
+    if (result.fix_used[k]) ++result.fixes_used;
+  }
+  result.fixes_rejected = positions.size() - result.fixes_used;
+  result.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
+                                                              start)
+                        .count();
+  return result;
+}
+
+}  // namespace rovermap::graph

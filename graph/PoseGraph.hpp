@@ -1,0 +1,92 @@
+#pragma once
+// A pose graph over the frames (docs/graph.md): the chained frame-to-frame increments as
+// relative factors weighted by their covariances, absolute position fixes (GNSS) as robust
+// factors gated against the solution, solved with Ceres. Ceres stays inside PoseGraph.cpp.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace rovermap::graph {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Options of SolvePoseGraph; plain values, in-class defaults.
+struct PoseGraphOptions {
+  /// [σ] a position fix's whitened residual beyond this is weighed linearly (Huber), so that a
+  /// fix far from the others pulls with a bounded force while the gate decides on it. About
+  /// √fix_gate_chi2: a fix within the gate weighs fully; > 0.
+  double fix_huber_sigmas = 4.0;
+  /// [χ², 3 dof] a fix whose whitened squared residual at the solution exceeds this is rejected
+  /// and the graph solved again without it (16.27: 99.9 % of good fixes pass); > 0.
+  double fix_gate_chi2 = 16.27;
+  /// [count] solve–gate rounds at most (each round rejects the worst fixes); >= 1.
+  int max_gate_rounds = 20;
+  /// [count] Levenberg–Marquardt iterations per solve; >= 1.
+  int max_iterations = 100;
+  /// [deg] σ of the weak prior that holds frame 0's attitude where it was (removes the gauge
+  /// freedom a few collinear fixes leave); > 0.
+  double first_pose_sigma_deg = 5.0;
+  /// [m] σ of that prior on frame 0's position; > 0.
+  double first_pose_sigma_m = 100.0;
+  /// [rad], [m] floor of a relative factor's σ: a zero covariance (frame 0, a step given as
+  /// exact) would be a hard constraint the solver cannot weigh; > 0.
+  double min_increment_sigma_rad = 1e-6;
+  double min_increment_sigma_m = 1e-6;
+};
+
+/// @throw std::invalid_argument naming the field if a value is out of range.
+void Validate(const PoseGraphOptions& options);
+
+/// T_from_to measured, with the covariance of a left perturbation in frame `from`
+/// ([rx ry rz (rad) tx ty tz (m)], RegistrationResult's and PoseChain's convention:
+/// T_true = (Exp(δr), δt) ∘ T_from_to).
+struct RelativeFactor {
+  std::size_t from = 0;
+  std::size_t to = 0;
+  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();
+  Matrix6d covariance = Matrix6d::Identity();
+};
+
+/// An absolute position of the point `lever_arm_body` of node `node` (a GNSS antenna), in the
+/// world frame [m], with its covariance [m²].
+struct PositionFactor {
+  std::size_t node = 0;
+  Eigen::Vector3d position_world = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d lever_arm_body = Eigen::Vector3d::Zero();
+};
+
+/// What SolvePoseGraph did.
+struct PoseGraphResult {
+  /// The graph was solved: there was at least one position factor and Ceres returned a usable
+  /// solution. false: `T_world_body` is the initial trajectory, `message` says why.
+  bool solved = false;
+  std::vector<Eigen::Isometry3d> T_world_body;  ///< one per node
+  /// Per position factor: used in the final solve, and its whitened squared residual there.
+  std::vector<bool> fix_used;
+  std::vector<double> fix_chi2;
+  std::size_t fixes_used = 0;
+  std::size_t fixes_rejected = 0;
+  int solves = 0;      ///< gate rounds run
+  int iterations = 0;  ///< Levenberg–Marquardt iterations, all solves
+  double final_cost = 0.0;
+  double solve_ms = 0.0;
+  std::string message;
+};
+
+/// Solves for every node's T_world_body from `initial` (one per node, the chained trajectory):
+/// relative factors as least squares in their covariance, position factors with a Huber loss,
+/// then rounds of gating (a fix over PoseGraphOptions::fix_gate_chi2 at the solution is left out
+/// and the rest solved again, until none is left out or the rounds end). With no position
+/// factor nothing is solved and the initial trajectory is returned as it is.
+/// @throw std::invalid_argument if a factor names a node that does not exist, a covariance is
+///        not finite or not symmetric positive semi-definite, or the options are invalid.
+PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
+                               const std::vector<RelativeFactor>& relative,
+                               const std::vector<PositionFactor>& positions,
+                               const PoseGraphOptions& options = {});
+
+}  // namespace rovermap::graph
