@@ -13,7 +13,7 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 # In link order: each module before the ones it uses (the pkg-config Libs line follows it).
-set(ROVERMAP_LIBRARY_MODULES config campaign mosaic service mapper sim eval stereo io terrain dem registration)
+set(ROVERMAP_LIBRARY_MODULES config campaign mosaic service mapper sim eval stereo io graph terrain dem registration)
 set(rovermap_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/rovermap)
 
 foreach(module IN LISTS ROVERMAP_LIBRARY_MODULES)

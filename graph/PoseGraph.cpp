@@ -24,8 +24,7 @@ Eigen::Matrix<double, N, N> SqrtInformation(const Eigen::Matrix<double, N, N>& c
   const Eigen::Matrix<double, N, N> floor = floor_variance.asDiagonal();
   const Eigen::Matrix<double, N, N> sym = 0.5 * (covariance + covariance.transpose()) + floor;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(sym);
-  const Eigen::Matrix<double, N, 1> values =
-      eig.eigenvalues().cwiseMax(floor_variance.minCoeff());
+  const Eigen::Matrix<double, N, 1> values = eig.eigenvalues().cwiseMax(floor_variance.minCoeff());
   // Σ⁻¹ = V diag(1/λ) Vᵀ; its Cholesky factor's transpose whitens.
   const Eigen::Matrix<double, N, N> information =
       eig.eigenvectors() * values.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
@@ -50,8 +49,8 @@ struct Node {
 
 Node ToNode(const Eigen::Isometry3d& T) {
   const Eigen::Quaterniond q(T.linear());
-  return {{q.x(), q.y(), q.z(), q.w()}, {T.translation().x(), T.translation().y(),
-                                         T.translation().z()}};
+  return {{q.x(), q.y(), q.z(), q.w()},
+          {T.translation().x(), T.translation().y(), T.translation().z()}};
 }
 
 Eigen::Isometry3d FromNode(const Node& n) {
@@ -213,27 +212,26 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       problem.AddParameterBlock(node.t, 3);
     }
     const Node first = ToNode(initial.front());
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost{
-            Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
-            initial.front().translation(), prior_L}),
-        nullptr, nodes.front().q, nodes.front().t);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost{
+                                 Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
+                                 initial.front().translation(), prior_L}),
+                             nullptr, nodes.front().q, nodes.front().t);
     for (std::size_t k = 0; k < relative.size(); ++k) {
       const RelativeFactor& f = relative[k];
       problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(new RelativeCost{
-              Eigen::Quaterniond(f.T_from_to.linear()).normalized(), f.T_from_to.translation(),
-              relative_L[k]}),
+          new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(
+              new RelativeCost{Eigen::Quaterniond(f.T_from_to.linear()).normalized(),
+                               f.T_from_to.translation(), relative_L[k]}),
           nullptr, nodes[f.from].q, nodes[f.from].t, nodes[f.to].q, nodes[f.to].t);
     }
     std::size_t used = 0;
     for (std::size_t k = 0; k < positions.size(); ++k) {
       if (!use[k]) continue;
       const PositionFactor& f = positions[k];
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3>(
-              new PositionCost{f.position_world, f.lever_arm_body, fix_L[k]}),
-          new ceres::HuberLoss(options.fix_huber_sigmas), nodes[f.node].q, nodes[f.node].t);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PositionCost, 3, 4, 3>(
+                                   new PositionCost{f.position_world, f.lever_arm_body, fix_L[k]}),
+                               new ceres::HuberLoss(options.fix_huber_sigmas), nodes[f.node].q,
+                               nodes[f.node].t);
       ++used;
     }
     if (used == 0) {
@@ -277,8 +275,7 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     const bool last_round = round + 1 == options.max_gate_rounds;
     double worst = 0.0;
     for (std::size_t k = 0; k < positions.size(); ++k) {
-      result.fix_chi2[k] =
-          FixChi2(positions[k], fix_L[k], result.T_world_body[positions[k].node]);
+      result.fix_chi2[k] = FixChi2(positions[k], fix_L[k], result.T_world_body[positions[k].node]);
       if (use[k]) worst = std::max(worst, result.fix_chi2[k]);
     }
     for (std::size_t k = 0; k < positions.size(); ++k) {
@@ -296,9 +293,8 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     if (result.fix_used[k]) ++result.fixes_used;
   }
   result.fixes_rejected = positions.size() - result.fixes_used;
-  result.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                              start)
-                        .count();
+  result.solve_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -5,13 +5,15 @@ set -euo pipefail
 
 # libnanoflann-dev is for bench/bench_kdtree only; the build leaves that benchmark out without it.
 # liblz4-dev, libzstd-dev, libsqlite3-dev and zlib1g-dev read ROS 2 bags (MCAP chunks, their
-# CRC32, the SQLite storage); the ROS 1 packages only ROS 1 bags (ROVERMAP_WITH_ROSBAG).
+# CRC32, the SQLite storage); the ROS 1 packages only ROS 1 bags (ROVERMAP_WITH_ROSBAG);
+# libceres-dev solves the pose graph (graph/).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libnanoflann-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libopencv-dev liboctomap-dev libgeographiclib-dev libgdal-dev libtbb-dev libspdlog-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liblz4-dev libzstd-dev libsqlite3-dev zlib1g-dev
+  libceres-dev
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev libtf2-msgs-dev
   clang libclang-rt-14-dev libomp-dev
   slurmctld slurmd slurm-client munge

@@ -134,7 +134,8 @@ TEST(PoseGraph, AChainStartingFarAwayIsPulledOntoTheFixes) {
   Eigen::Isometry3d offset = Pose(30.0, -10.0, 20.0);
   const Traverse t = MakeTraverse(offset);
   ASSERT_GT(MaxPositionError(t.chained, t.truth), 30.0);
-  const graph::PoseGraphResult r = graph::SolvePoseGraph(t.chained, t.relative, Fixes(t, 0.5, 10, 3));
+  const graph::PoseGraphResult r =
+      graph::SolvePoseGraph(t.chained, t.relative, Fixes(t, 0.5, 10, 3));
   ASSERT_TRUE(r.solved) << r.message;
   EXPECT_EQ(r.fixes_rejected, 0u);
   EXPECT_LT(MaxPositionError(r.T_world_body, t.truth), 1.0);
@@ -148,8 +149,10 @@ TEST(PoseGraph, MultipathJumpsAreRejectedAndLeaveNoTrace) {
   const std::vector<std::size_t> jumps = {3, 9, 15};
   std::vector<graph::PositionFactor> fixes = good, without;
   for (std::size_t k = 0; k < good.size(); ++k) {
-    if (std::find(jumps.begin(), jumps.end(), k) == jumps.end()) without.push_back(good[k]);
-    else fixes[k].position_world += Eigen::Vector3d(12.0, -8.0, 3.0);
+    if (std::find(jumps.begin(), jumps.end(), k) == jumps.end())
+      without.push_back(good[k]);
+    else
+      fixes[k].position_world += Eigen::Vector3d(12.0, -8.0, 3.0);
   }
   const graph::PoseGraphResult clean = graph::SolvePoseGraph(t.chained, t.relative, without);
   ASSERT_TRUE(clean.solved);

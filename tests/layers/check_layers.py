@@ -22,7 +22,7 @@ import tempfile
 # Lowest first; the order follows target_link_libraries in each module's CMakeLists.txt.
 LAYERS = [
     ["core"],                                  # header-only: units, the stopwatch
-    ["registration", "dem", "terrain"],        # the matcher; the maps; the terrain layers
+    ["registration", "dem", "terrain", "graph"],  # the matcher; the maps; terrain layers; pose graph
     ["io", "stereo"],                          # files and formats; correlation stereo
     ["eval", "sim", "mosaic", "campaign"],     # metrics, simulator, mosaics, campaigns
     ["mapper"],                                # the per-frame pipeline
