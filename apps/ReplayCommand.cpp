@@ -17,7 +17,9 @@
 #include "core/Stopwatch.hpp"
 #include "io/FileUtil.hpp"
 #include "io/FrameSource.hpp"
+#include "io/Gnss.hpp"
 #include "io/IoError.hpp"
+#include "mapper/GnssGraph.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReadAhead.hpp"
 #include "service/DriftReport.hpp"
@@ -125,6 +127,13 @@ int RunReplay(const ReplayArgs& args) {
   }
   // Opening validates the whole recording (calibration, poses, frame files) before any output.
   const std::unique_ptr<io::FrameSource> source = OpenRecording(args.sequence, cfg, "replay");
+  // GNSS fixes beside a sequence directory (docs/graph.md), read before any output too.
+  std::vector<io::GnssFix> gnss;
+  const std::filesystem::path gnss_file = source->info().directory / "gnss.csv";
+  if (std::filesystem::is_directory(source->info().directory) &&
+      std::filesystem::exists(gnss_file)) {
+    gnss = io::ReadGnssCsv(gnss_file);
+  }
   std::unique_ptr<mapper::Mapper> mapper;
   try {
     mapper = std::make_unique<mapper::Mapper>(source->info(), PipelineFrom(cfg));
@@ -155,11 +164,38 @@ int RunReplay(const ReplayArgs& args) {
   }
   progress.Done();
 
+  // The pose graph over the frames with the GNSS fixes; when it moves the trajectory, the maps
+  // are fused again from its poses (a second pass over the recording).
+  std::optional<mapper::GraphOutcome> graph;
+  try {
+    graph = mapper::SolveGnssGraph(mapper->results(), source->info().sensor_type, gnss,
+                                   mapper->georeference(), cfg.graph, cfg.mapper);
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError(e.what());
+  }
+  if (graph) {
+    const graph::PoseGraphResult& g = graph->solution;
+    std::cerr << "replay: pose graph: " << g.fixes_used << " of " << graph->fixes
+              << " GNSS fixes used (" << g.fixes_rejected << " rejected, " << graph->unmatched
+              << " without a frame), " << std::fixed << std::setprecision(0) << g.solve_ms << " ms"
+              << (g.solved ? "" : "; kept the frame-to-frame trajectory: " + g.message) << "\n";
+    if (g.solved) {
+      graph->frames_refused = mapper::RefuseFrames(
+          *source, mapper.get(), g.T_world_body, [&](std::size_t k, std::size_t n) {
+            if (k == n || k % 10 == 0)
+              std::cerr << "replay: fusing the maps again from the pose graph, frame " << k << "/"
+                        << n << "\n";
+          });
+    }
+  }
+
   std::filesystem::create_directories(out);
   mapper::RunInfo run;
   run.sequence = args.sequence;
   run.wall_ms = MsSince(start);
-  const nlohmann::json summary = mapper::WriteOutputs(out, *mapper, run, cfg.eval);
+  mapper::OutputState state(*mapper);
+  state.graph = std::move(graph);
+  const nlohmann::json summary = mapper::WriteOutputs(out, state, run, cfg.eval);
   std::cout << summary.dump(2) << "\n";
   ReportHeadline(summary, out);
   return kExitOk;

@@ -272,6 +272,8 @@ const std::vector<KeyRule>& Rules() {
        [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_translation); }},
       {"bag.T_body_sensor_rpy_deg", "exactly 3 of them",
        [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_rpy_deg); }},
+      {"graph.gnss_antenna_m", "exactly 3 of them",
+       [three_numbers](const Config& c) { return three_numbers(c.graph.gnss_antenna_m); }},
       {"sim.terrain_cell_m", "sim.terrain_size_m / sim.terrain_cell_m < 20000",
        [](const Config& c) -> Broken {
          if (c.sim.terrain_size_m / c.sim.terrain_cell_m < 20000) return std::nullopt;

@@ -12,6 +12,7 @@
 #include "dem/OctoMapOptions.hpp"
 #include "eval/EvalOptions.hpp"
 #include "io/BagOptions.hpp"
+#include "mapper/GraphOptions.hpp"
 #include "mapper/MapperOptions.hpp"
 #include "mapper/ServeOptions.hpp"
 #include "mosaic/MosaicOptions.hpp"
@@ -46,6 +47,7 @@ struct Config {
   eval::EvalOptions eval;
   mapper::MapperOptions mapper;
   mapper::ServeOptions serve;
+  mapper::GraphOptions graph;
   BagConfig bag;
   mosaic::MosaicOptions mosaic;
   campaign::CampaignOptions campaign;

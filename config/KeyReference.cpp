@@ -44,6 +44,10 @@ const std::map<std::string, std::string>& SectionLeads() {
       {"mapper",
        "The per-frame pipeline of `replay` and `serve`: the reference a frame is registered "
        "onto, bad frames, dead reckoning's uncertainty and when a registration is rejected."},
+      {"graph",
+       "The pose graph `replay` solves when the sequence has GNSS fixes (gnss.csv): how a fix is "
+       "matched to a frame, where the antenna sits, and when a fix is rejected "
+       "([graph.md](graph.md))."},
       {"serve",
        "The `serve` daemon: watching the inbox, missing frames, and how often it publishes "
        "outputs, snapshots its state and rewrites status.json."},

@@ -235,6 +235,16 @@ std::vector<KeyEntry> BuildRegistry() {
              "heading-rate bias");
   sim.Double("heading_random_walk_deg_rt_s", &M::heading_random_walk_deg_rt_s, "deg/sqrt(s)",
              AtLeast(0), "heading random walk");
+  sim.Int("gnss_every_frames", &M::gnss_every_frames, "frames", AtLeast(0),
+          "write gnss.csv: a fix of the body origin every this many frames; 0 = none");
+  sim.Double("gnss_sigma_m", &M::gnss_sigma_m, "m", GreaterThan(0),
+             "GNSS noise and reported sigma, east and north");
+  sim.Double("gnss_sigma_up_m", &M::gnss_sigma_up_m, "m", GreaterThan(0),
+             "GNSS noise and reported sigma, up");
+  sim.Double("gnss_outlier_fraction", &M::gnss_outlier_fraction, "fraction",
+             Bounds{0, false, 1, false}, "fixes thrown gnss_outlier_m off (multipath)");
+  sim.Double("gnss_outlier_m", &M::gnss_outlier_m, "m", AtLeast(0),
+             "horizontal jump of a multipath fix");
 
   using D = dem::ElevationMapOptions;
   SectionKeys<D> dem_keys(keys, "dem", &Config::dem);
@@ -381,6 +391,24 @@ std::vector<KeyEntry> BuildRegistry() {
              "prior sigma of dead reckoning's bias per step, fraction of its sigma per step");
   map.Double("bias_min_information", &P::bias_min_information, "ratio", Bounds{0, false, 1, true},
              "directions with at least this information inform the bias estimate");
+
+  using G = mapper::GraphOptions;
+  SectionKeys<G> gr(keys, "graph", &Config::graph);
+  gr.Bool("enabled", &G::enabled,
+          "solve the pose graph when the recording has GNSS fixes (gnss.csv); false: frame to "
+          "frame only");
+  gr.Double("gnss_max_time_offset_s", &G::gnss_max_time_offset_s, "s", AtLeast(0),
+            "a fix belongs to the nearest frame within this");
+  gr.DoubleList("gnss_antenna_m", &G::gnss_antenna_m, "m", AnyValue(),
+                "x y z (3 numbers) of the GNSS antenna in the body frame");
+  gr.Double("fix_gate_chi2", &G::fix_gate_chi2, "chi2", GreaterThan(0),
+            "a fix farther from the solution is rejected (3 dof; 16.27 = 99.9 %)");
+  gr.Double("fix_huber_sigmas", &G::fix_huber_sigmas, "sigma", GreaterThan(0),
+            "a fix's residual beyond this weighs linearly (Huber)");
+  gr.Int("min_gnss_fixes", &G::min_gnss_fixes, "count", AtLeast(1),
+         "fewer fixes left after the gate: the frame-to-frame trajectory is kept");
+  gr.Int("max_gate_rounds", &G::max_gate_rounds, "count", AtLeast(1),
+         "solve-and-reject rounds at most");
 
   using V = mapper::ServeOptions;
   SectionKeys<V> serve(keys, "serve", &Config::serve);

@@ -148,6 +148,7 @@ void Validate(const PoseGraphOptions& o) {
   positive(o.min_increment_sigma_rad, "min_increment_sigma_rad");
   positive(o.min_increment_sigma_m, "min_increment_sigma_m");
   if (o.max_gate_rounds < 1) throw std::invalid_argument("graph.max_gate_rounds must be >= 1");
+  if (o.min_fixes < 1) throw std::invalid_argument("graph.min_fixes must be >= 1");
   if (o.max_iterations < 1) throw std::invalid_argument("graph.max_iterations must be >= 1");
 }
 
@@ -234,10 +235,11 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                nodes[f.node].t);
       ++used;
     }
-    if (used == 0) {
-      result.message = "every position fix was rejected: the chained trajectory is kept";
+    if (used < static_cast<std::size_t>(options.min_fixes)) {
+      result.message = std::to_string(used) + " position fix" + (used == 1 ? "" : "es") +
+                       " left after the gate, fewer than " + std::to_string(options.min_fixes) +
+                       ": the chained trajectory is kept";
       result.T_world_body = initial;
-      result.fixes_rejected = positions.size();
       result.solved = false;
       break;
     }

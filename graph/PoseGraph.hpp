@@ -22,6 +22,10 @@ struct PoseGraphOptions {
   /// [χ², 3 dof] a fix whose whitened squared residual at the solution exceeds this is rejected
   /// and the graph solved again without it (16.27: 99.9 % of good fixes pass); > 0.
   double fix_gate_chi2 = 16.27;
+  /// [count] fewer fixes left after the gate: the graph keeps the initial trajectory. Fixes
+  /// that all disagree are rejected until one or two are left, which agree with the chain
+  /// whatever they say; >= 1.
+  int min_fixes = 3;
   /// [count] solve–gate rounds at most (each round rejects the worst fixes); >= 1.
   int max_gate_rounds = 20;
   /// [count] Levenberg–Marquardt iterations per solve; >= 1.

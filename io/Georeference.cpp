@@ -133,6 +133,15 @@ Eigen::Vector3d Georeference::EnuToGeodetic(double x_m, double y_m, double z_m) 
   return {lat, lon, h};
 }
 
+Eigen::Vector3d Georeference::GeodeticToEnu(double latitude_deg, double longitude_deg,
+                                            double height_m) const {
+  const GeographicLib::LocalCartesian enu(origin_.latitude_deg, origin_.longitude_deg,
+                                          origin_.altitude_m, Earth(body_));
+  double x = 0, y = 0, z = 0;
+  enu.Forward(latitude_deg, longitude_deg, height_m, x, y, z);
+  return {x, y, z};
+}
+
 Eigen::Vector2d Georeference::EnuToProjectedExact(double x_m, double y_m, double z_m) const {
   const Eigen::Vector3d geo = EnuToGeodetic(x_m, y_m, z_m);
   return ProjectGeodetic(geo.x(), geo.y());

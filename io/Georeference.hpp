@@ -77,6 +77,9 @@ class Georeference {
   Eigen::Vector2d EnuToProjectedExact(double x_m, double y_m, double z_m = 0.0) const;
   /// ENU -> (latitude deg, longitude deg, height m) through GeographicLib.
   Eigen::Vector3d EnuToGeodetic(double x_m, double y_m, double z_m = 0.0) const;
+  /// (latitude deg, longitude deg, height m) -> ENU [m] through GeographicLib: a GNSS fix in
+  /// the world frame.
+  Eigen::Vector3d GeodeticToEnu(double latitude_deg, double longitude_deg, double height_m) const;
 
  private:
   Eigen::Vector2d ProjectGeodetic(double lat_deg, double lon_deg) const;

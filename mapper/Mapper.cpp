@@ -504,6 +504,16 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   result->time.fuse_octomap_ms = MsSince(octomap_start);
 }
 
+void Mapper::ResetMaps() {
+  elevation_map_ = dem::ElevationMap(GridAlongProjection(options_.dem, georef_));
+  octomap_.MutableFusion() = dem::OctoMapFusion(options_.octomap);
+}
+
+void Mapper::FuseAgain(const PreparedFrame& prepared, const ChainStep& step) {
+  FrameResult scratch;
+  Fuse(prepared.Fused(), prepared.isolated.keep, prepared.loaded.fill, step, &scratch);
+}
+
 void Mapper::KeepAsReference(std::unique_ptr<registration::IndexedCloud> cloud,
                              const ChainStep& step, double reference_distance_m) {
   reference_index_ = step.index;

@@ -178,6 +178,13 @@ class Mapper {
   /// @throw ReapplyError if the frame cannot be read now or the chained pose differs.
   FrameResult Reapply(const FrameResult& recorded, const io::Frame* frame);
 
+  /// Empties the DEM and the OctoMap, keeping the results and the chain: the pose graph's
+  /// re-fusion (GnssGraph's RefuseFrames) fuses every frame again at its optimised pose.
+  void ResetMaps();
+  /// Step 7 alone: fuses `prepared` at `step`'s pose with its covariance, as ProcessPrepared
+  /// did; registers, chains and records nothing. Never throws on data.
+  void FuseAgain(const PreparedFrame& prepared, const ChainStep& step);
+
   /// Every frame's result so far, in order.
   const std::vector<FrameResult>& results() const { return results_; }
   /// The chain (nullptr before the first frame).

@@ -81,13 +81,14 @@ nlohmann::json StageJson(const std::vector<FrameResult>& results,
 
 }  // namespace
 
-std::string DriftCsv(const std::vector<FrameResult>& results) {
+std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome* graph) {
   std::ostringstream s;
   s << "index,timestamp,dx_m,dy_m,dz_m,droll_deg,dpitch_deg,dyaw_deg,"
        "cum_dx_m,cum_dy_m,cum_dz_m,cum_droll_deg,cum_dpitch_deg,cum_dyaw_deg,"
        "status,fallback_reason,odometry_directions,iterations,inliers,inlier_ratio,rms_m,time_ms,"
        "matcher_status,conditioning,points,outliers_removed,detail,"
-       "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,image_check\n";
+       "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,image_check,"
+       "graph_dx_m,graph_dy_m,graph_dz_m,graph_droll_deg,graph_dpitch_deg,graph_dyaw_deg,gnss\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
     s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
@@ -101,17 +102,32 @@ std::string DriftCsv(const std::vector<FrameResult>& results) {
       << Quoted(r.detail);
     const PoseSigmas sd = SigmasOf(r.step);
     s << ',' << sd.x_m << ',' << sd.y_m << ',' << sd.z_m << ',' << sd.roll_deg << ','
-      << sd.pitch_deg << ',' << sd.yaw_deg << ',' << ToString(r.image_check) << '\n';
+      << sd.pitch_deg << ',' << sd.yaw_deg << ',' << ToString(r.image_check);
+    const bool solved =
+        graph != nullptr && graph->solution.solved && r.index < graph->solution.T_world_body.size();
+    AppendComponents(s, solved
+                            ? r.step.T_world_body.inverse() * graph->solution.T_world_body[r.index]
+                            : Eigen::Isometry3d::Identity());
+    const char* gnss = "none";
+    if (graph != nullptr && r.index < graph->frame_fixes.size()) {
+      for (const std::size_t f : graph->frame_fixes[r.index]) {
+        gnss = solved && graph->solution.fix_used[f] ? "used" : "rejected";
+        if (std::string(gnss) == "used") break;
+      }
+    }
+    s << ',' << gnss << '\n';
   }
   return s.str();
 }
 
 std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& results,
-                                          const eval::EvalOptions& options) {
+                                          const eval::EvalOptions& options,
+                                          const std::vector<Eigen::Isometry3d>* poses) {
   std::vector<Eigen::Isometry3d> registered, odometry, truth;
-  for (const FrameResult& r : results) {
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const FrameResult& r = results[k];
     if (!r.T_world_body_truth) continue;
-    registered.push_back(r.step.T_world_body);
+    registered.push_back(poses != nullptr && k < poses->size() ? (*poses)[k] : r.step.T_world_body);
     odometry.push_back(r.step.T_world_body_odom);
     truth.push_back(*r.T_world_body_truth);
   }
@@ -195,8 +211,22 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
   return summary;
 }
 
+nlohmann::json GraphJson(const GraphOutcome& graph) {
+  const graph::PoseGraphResult& s = graph.solution;
+  return {{"solved", s.solved},
+          {"gnss_fixes", graph.fixes},
+          {"gnss_unmatched", graph.unmatched},
+          {"gnss_used", s.fixes_used},
+          {"gnss_rejected", s.fixes_rejected},
+          {"rounds", s.solves},
+          {"iterations", s.iterations},
+          {"solve_ms", s.solve_ms},
+          {"frames_not_refused", graph.frames_refused},
+          {"message", s.message}};
+}
+
 void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
-                    const std::optional<DriftMetrics>& drift) {
+                    const std::optional<DriftMetrics>& drift, bool chain_sigma) {
   using namespace eval::plot;
   const cv::Scalar kRed(40, 40, 210);
   std::vector<double> index, dt, dr, fallback_index;
@@ -253,7 +283,7 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     const auto& reg = drift->registered;
     const auto& odo = drift->odometry;
     // One error per frame when every frame has ground truth; else no σ line.
-    const bool with_sigma = reg.distance_m.size() == two_sigma.size();
+    const bool with_sigma = chain_sigma && reg.distance_m.size() == two_sigma.size();
     const double y1 = std::max({peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m),
                                 with_sigma ? peak(two_sigma) : 0.0}) *
                       LegendHeadroom(area.height, with_sigma ? 3 : 2);

@@ -20,7 +20,10 @@ namespace rovermap::mapper {
 /// fallback_reason, odometry_directions (space separated, e.g. "x y yaw"), iterations, inliers,
 /// inlier_ratio, rms_m, time_ms; then matcher_status, conditioning, points, outliers_removed and
 /// the quoted detail.
-std::string DriftCsv(const std::vector<FrameResult>& results);
+/// With `graph` (solved): then graph_dx_m … graph_dyaw_deg, the graph's correction of the
+/// chained pose (T_chained⁻¹ · T_graph, in the chained body frame), and `gnss`: used, rejected
+/// or none; without one the columns are 0 and none.
+std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome* graph = nullptr);
 
 /// Registered and dead-reckoning trajectories against the ground truth, over the frames that
 /// carry a true pose (all of them when the sequence has groundtruth.tum).
@@ -28,9 +31,15 @@ struct DriftMetrics {
   eval::TrajectoryMetrics registered;
   eval::TrajectoryMetrics odometry;
 };
-/// nullopt when fewer than two frames carry a true pose. Never throws.
+/// nullopt when fewer than two frames carry a true pose. `poses`, when given (one per result),
+/// is the trajectory judged instead of the chained one (the pose graph's). Never throws.
 std::optional<DriftMetrics> EvaluateDrift(const std::vector<FrameResult>& results,
-                                          const eval::EvalOptions& options);
+                                          const eval::EvalOptions& options,
+                                          const std::vector<Eigen::Isometry3d>* poses = nullptr);
+
+/// summary.json's `graph`: fixes given, matched to frames, used and rejected, the solver's
+/// rounds, iterations and time, and why it kept the chain when it did.
+nlohmann::json GraphJson(const GraphOutcome& graph);
 
 /// What the caller measured around the mapper.
 struct RunInfo {
@@ -56,8 +65,10 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
 /// the drift against distance travelled: position error against the ground truth (registered
 /// and dead reckoning, aligned at the first pose) when `drift` is given, else the cumulative
 /// correction. Written atomically. @throw io::IoError naming `path`.
+/// `chain_sigma`: draw the chain's 2σ (false when `drift` judges another trajectory than the
+/// chained one, the pose graph's).
 void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
-                    const std::optional<DriftMetrics>& drift);
+                    const std::optional<DriftMetrics>& drift, bool chain_sigma = true);
 
 /// Peak resident set size of this process [MB] (getrusage).
 double PeakRssMb();

@@ -13,6 +13,7 @@
 
 #include "io/DemLayers.hpp"
 #include "io/Georeference.hpp"
+#include "mapper/GnssGraph.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::mapper {
@@ -36,6 +37,10 @@ struct OutputState {
   Eigen::Isometry3d final_correction = Eigen::Isometry3d::Identity();
   std::optional<int> stereo_num_disparities;  ///< stereo sequences only
   terrain::TerrainOptions terrain;            ///< terrain.tif and terrain.png
+  /// The pose graph's outcome (replay with GNSS fixes, docs/graph.md); set by the caller. When
+  /// solved, trajectory.tum, the metrics and the previews are its poses, and the chained ones
+  /// go to trajectory_f2f.tum.
+  std::optional<GraphOutcome> graph;
 };
 
 }  // namespace rovermap::mapper

@@ -75,17 +75,27 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   };
   const auto start = std::chrono::steady_clock::now();
   const std::vector<FrameResult>& results = state.results;
+  // The pose graph's trajectory, when it was solved, is the result; the chain's is kept beside.
+  const GraphOutcome* graph = state.graph ? &*state.graph : nullptr;
+  const std::vector<Eigen::Isometry3d>* optimised =
+      graph != nullptr && graph->solution.solved &&
+              graph->solution.T_world_body.size() == results.size()
+          ? &graph->solution.T_world_body
+          : nullptr;
 
-  std::vector<io::StampedPose> trajectory, odometry;
+  std::vector<io::StampedPose> trajectory, chained, odometry;
   // dem.png: ground truth (when every frame has it) as a wide band, dead reckoning, registered
   // on top: where the registered path follows the truth, the truth shows on both sides of it.
   io::PreviewTrajectory truth_xy{"ground truth", {40, 200, 40}, {}, 8};
   io::PreviewTrajectory odometry_xy{"dead reckoning", {230, 60, 40}, {}};
   io::PreviewTrajectory registered_xy{"registered", {255, 255, 255}, {}};
-  for (const FrameResult& r : results) {
-    trajectory.push_back({r.timestamp, r.step.T_world_body, 0, {}});
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const FrameResult& r = results[k];
+    const Eigen::Isometry3d& T = optimised ? (*optimised)[k] : r.step.T_world_body;
+    trajectory.push_back({r.timestamp, T, 0, {}});
+    chained.push_back({r.timestamp, r.step.T_world_body, 0, {}});
     odometry.push_back({r.timestamp, r.step.T_world_body_odom, 0, {}});
-    registered_xy.points.push_back(r.step.T_world_body.translation());
+    registered_xy.points.push_back(T.translation());
     odometry_xy.points.push_back(r.step.T_world_body_odom.translation());
     if (r.T_world_body_truth) truth_xy.points.push_back(r.T_world_body_truth->translation());
   }
@@ -95,9 +105,16 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   drawn.push_back(std::move(registered_xy));
   io::WriteTum(out_dir / "trajectory.tum", trajectory);
   done("trajectory.tum");
+  if (optimised) {
+    io::WriteTum(out_dir / "trajectory_f2f.tum", chained);
+    done("trajectory_f2f.tum");
+  } else {
+    std::error_code ignored;  // an earlier run's, into the same folder with --force
+    std::filesystem::remove(out_dir / "trajectory_f2f.tum", ignored);
+  }
   io::WriteTum(out_dir / "odometry.tum", odometry);
   done("odometry.tum");
-  io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results));
+  io::WriteFileAtomically(out_dir / "drift.csv", DriftCsv(results, graph));
   done("drift.csv");
 
   io::WriteDemGeoTiff(out_dir / "dem.tif", state.dem, state.georeference);
@@ -112,14 +129,22 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   io::WriteDemPreview(out_dir / "dem.png", state.dem, drawn);
   done("dem.png");
   nlohmann::json terrain = WriteTerrain(out_dir, state, drawn, done, terrain_cache);
-  const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options);
-  WriteDriftPlot(out_dir / "drift.png", results, drift);
+  const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options, optimised);
+  WriteDriftPlot(out_dir / "drift.png", results, drift, /*chain_sigma=*/optimised == nullptr);
   done("drift.png");
 
   run.write_ms = core::MsSince(start);
   if (run.peak_rss_mb <= 0.0) run.peak_rss_mb = PeakRssMb();
   nlohmann::json summary = Summary(state, run, drift);
   summary["terrain"] = std::move(terrain);
+  if (graph != nullptr) {
+    summary["graph"] = GraphJson(*graph);
+    if (optimised && drift) {
+      if (const auto chained_drift = EvaluateDrift(results, eval_options)) {
+        summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);
+      }
+    }
+  }
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
   done("summary.json");
   return summary;

@@ -76,6 +76,16 @@ struct SimOptions {
   double odom_slip_sigma = 0.02;               ///< per-step slip σ (ratio)
   double heading_bias_deg_s = 0.05;            ///< heading-rate bias
   double heading_random_walk_deg_rt_s = 0.05;  ///< heading random walk [deg/√s]
+
+  // GNSS (gnss.csv beside the sequence, docs/graph.md): a fix of the body origin every
+  // `gnss_every_frames` frames (0 = none), with Gaussian noise of the σ it reports, and a
+  // fraction of fixes thrown `gnss_outlier_m` off in a random horizontal direction (multipath),
+  // still reporting the nominal σ.
+  int gnss_every_frames = 0;
+  double gnss_sigma_m = 0.5;      ///< [m] horizontal σ, east and north
+  double gnss_sigma_up_m = 1.0;   ///< [m] vertical σ
+  double gnss_outlier_fraction = 0.0;
+  double gnss_outlier_m = 10.0;   ///< [m]
 };
 
 }  // namespace rovermap::sim

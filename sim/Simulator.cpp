@@ -11,6 +11,8 @@
 #include "core/Stopwatch.hpp"
 #include "core/Units.hpp"
 #include "io/FileUtil.hpp"
+#include "io/Georeference.hpp"
+#include "io/Gnss.hpp"
 #include "io/IoError.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/Rpy.hpp"
@@ -25,6 +27,7 @@ namespace fs = std::filesystem;
 constexpr std::uint64_t kSaltImageNoise = 1000;
 constexpr std::uint64_t kSaltCloud = 2000;
 constexpr std::uint64_t kSaltOdometry = 3000;
+constexpr std::uint64_t kSaltGnss = 4000;
 
 double WrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
@@ -270,6 +273,33 @@ SimCloud Simulator::RenderCloud(std::size_t index) const {
   return out;
 }
 
+std::vector<io::GnssFix> Simulator::GnssFixes() const {
+  const SimOptions& o = options_;
+  const io::Georeference georef(
+      {o.origin_latitude_deg, o.origin_longitude_deg, o.origin_altitude_m});
+  std::vector<io::GnssFix> fixes;
+  if (o.gnss_every_frames <= 0) return fixes;
+  for (std::size_t k = 0; k < truth_.size(); k += static_cast<std::size_t>(o.gnss_every_frames)) {
+    Eigen::Vector3d p = truth_[k].T_world_body.translation();
+    p.x() += o.gnss_sigma_m * HashNormal(o.seed, kSaltGnss, k, 0);
+    p.y() += o.gnss_sigma_m * HashNormal(o.seed, kSaltGnss, k, 1);
+    p.z() += o.gnss_sigma_up_m * HashNormal(o.seed, kSaltGnss, k, 2);
+    if (Hash01(o.seed, kSaltGnss + 1, k, 0) < o.gnss_outlier_fraction) {
+      const double angle = 2.0 * M_PI * Hash01(o.seed, kSaltGnss + 1, k, 1);
+      p += o.gnss_outlier_m * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+    }
+    const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
+    io::GnssFix f;
+    f.timestamp = truth_[k].timestamp;
+    f.latitude_deg = geo.x();
+    f.longitude_deg = geo.y();
+    f.altitude_m = geo.z();
+    f.sigma_enu_m = Eigen::Vector3d(o.gnss_sigma_m, o.gnss_sigma_m, o.gnss_sigma_up_m);
+    fixes.push_back(f);
+  }
+  return fixes;
+}
+
 SimulateResult Simulator::WriteSequence(
     const fs::path& dir, const std::function<void(std::size_t, std::size_t)>& progress) const {
   const SimOptions& o = options_;
@@ -308,6 +338,11 @@ SimulateResult Simulator::WriteSequence(
   result.render_ms = core::MsSince(start);
   io::WriteTum(dir / "groundtruth.tum", truth_);
   io::WriteTum(dir / "odometry.tum", odometry_);
+  if (o.gnss_every_frames > 0) {
+    const std::vector<io::GnssFix> fixes = GnssFixes();
+    io::WriteGnssCsv(dir / "gnss.csv", fixes);
+    result.gnss_fixes = fixes.size();
+  }
 
   result.frames = truth_.size();
   for (std::size_t k = 1; k < truth_.size(); ++k) {

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "io/Gnss.hpp"
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
 #include "registration/PointCloud.hpp"
@@ -24,6 +25,7 @@ struct SimulateResult {
   double path_length_m = 0.0;            ///< true distance travelled
   double final_odometry_error_m = 0.0;   ///< ‖t_odom − t_true‖ at the last frame
   double final_heading_error_deg = 0.0;  ///< odometry yaw − true yaw at the last frame
+  std::size_t gnss_fixes = 0;            ///< fixes written to gnss.csv
   std::size_t points = 0;                ///< cloud mode: points written
   std::size_t outliers = 0;              ///< cloud mode: outliers among them
   double render_ms = 0.0;                ///< total time spent rendering frames
@@ -63,6 +65,10 @@ class Simulator {
   /// @throw io::IoError naming the file if something cannot be written.
   SimulateResult WriteSequence(const std::filesystem::path& dir,
                                const std::function<void(std::size_t, std::size_t)>& progress) const;
+
+  /// The GNSS fixes gnss.csv holds (SimOptions::gnss_every_frames; none when 0), in the
+  /// sequence's geodetic frame (sim.origin_*). Deterministic in sim.seed.
+  std::vector<io::GnssFix> GnssFixes() const;
 
  private:
   Eigen::Isometry3d CameraPose(std::size_t index, bool right) const;

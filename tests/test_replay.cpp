@@ -20,9 +20,12 @@
 #include "io/Tum.hpp"
 #include "mapper/PoseChain.hpp"
 #include "tests/support/CommandFixture.hpp"
+#include "tests/support/DriftCsv.hpp"
 
 namespace fs = std::filesystem;
 using rovermap::testing::CommandResult;
+using rovermap::testing::Lines;
+using rovermap::testing::ReadCsv;
 using rovermap::testing::Slurp;
 
 namespace {
@@ -32,46 +35,6 @@ const fs::path kTinyStereo = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_stereo"
 const std::vector<std::string> kOutputs = {"dem.tif",      "map.bt",    "trajectory.tum",
                                            "odometry.tum", "drift.csv", "summary.json",
                                            "dem.png",      "drift.png"};
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') lines.push_back(line);
-  return lines;
-}
-
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  bool quoted = false;
-  for (char c : line) {
-    if (c == '"') quoted = !quoted;
-    if (c == ',' && !quoted) {
-      fields.push_back(field);
-      field.clear();
-    } else {
-      field += c;
-    }
-  }
-  fields.push_back(field);
-  return fields;
-}
-
-// drift.csv as rows of column name -> text.
-std::vector<std::map<std::string, std::string>> ReadCsv(const fs::path& p) {
-  const std::vector<std::string> lines = Lines(Slurp(p));
-  std::vector<std::map<std::string, std::string>> rows;
-  if (lines.empty()) return rows;
-  const std::vector<std::string> header = Split(lines[0]);
-  for (std::size_t i = 1; i < lines.size(); ++i) {
-    const std::vector<std::string> fields = Split(lines[i]);
-    std::map<std::string, std::string> row;
-    for (std::size_t k = 0; k < header.size() && k < fields.size(); ++k) row[header[k]] = fields[k];
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 class Replay : public rovermap::testing::CommandFixture {
  protected:

@@ -38,6 +38,17 @@ inline std::vector<std::string> DataLines(const std::filesystem::path& p) {
   return lines;
 }
 
+/// Runs the shell command `cmd` with stdout and stderr into `dir`.
+inline CommandResult RunCapturing(const std::string& cmd, const std::filesystem::path& dir) {
+  const int rc = std::system(
+      (cmd + " >" + (dir / "stdout").string() + " 2>" + (dir / "stderr").string()).c_str());
+  CommandResult r;
+  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
+  r.out = Slurp(dir / "stdout");
+  r.err = Slurp(dir / "stderr");
+  return r;
+}
+
 class CommandFixture : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = ScratchDir(); }
@@ -47,14 +58,8 @@ class CommandFixture : public ::testing::Test {
   CommandResult Rovermap(const std::string& args) {
     std::string cmd;
     for (const std::string& word : run_as_) cmd += word + " ";
-    cmd += std::string(ROVERMAP_EXECUTABLE) + " " + args + " >" + (dir_ / "stdout").string() +
-           " 2>" + (dir_ / "stderr").string();
-    const int rc = std::system(cmd.c_str());
-    CommandResult r;
-    r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + WTERMSIG(rc);
-    r.out = Slurp(dir_ / "stdout");
-    r.err = Slurp(dir_ / "stderr");
-    return r;
+    cmd += std::string(ROVERMAP_EXECUTABLE) + " " + args;
+    return RunCapturing(cmd, dir_);
   }
 
   /// Writes `text` to `name` in the scratch directory; returns its path.

@@ -1,0 +1,125 @@
+#include "mapper/GnssGraph.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "io/IoError.hpp"
+#include "mapper/FrameJudge.hpp"
+
+namespace rovermap::mapper {
+
+std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult>& results,
+                                                   io::SensorType sensor, const MapperOptions& o) {
+  std::vector<graph::RelativeFactor> factors;
+  for (std::size_t k = 1; k < results.size(); ++k) {
+    const FrameResult& r = results[k];
+    graph::RelativeFactor f;
+    f.from = k - 1;
+    f.to = k;
+    f.T_from_to = results[k - 1].step.T_world_body.inverse() * r.step.T_world_body;
+    const double length = f.T_from_to.translation().norm();
+    const bool registered =
+        (r.status == FrameStatus::kRegistered || r.status == FrameStatus::kPartial) &&
+        !r.step.fallback && r.increment_covariance.allFinite() &&
+        r.increment_covariance.diagonal().maxCoeff() > 0.0;
+    if (registered) {
+      f.covariance = r.increment_covariance;
+      if (sensor == io::SensorType::kStereo) {
+        const double rot = o.stereo_systematic_deg_per_m * M_PI / 180.0 * length;
+        const double tra = o.stereo_systematic_ratio * length;
+        f.covariance.diagonal().head<3>().array() += rot * rot;
+        f.covariance.diagonal().tail<3>().array() += tra * tra;
+      }
+    } else {
+      f.covariance = CovarianceOf(OdometryNoiseSigma(length, o));
+    }
+    f.covariance = 0.5 * (f.covariance + f.covariance.transpose()).eval();
+    factors.push_back(f);
+  }
+  return factors;
+}
+
+std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& results,
+                                           io::SensorType sensor,
+                                           const std::vector<io::GnssFix>& fixes,
+                                           const io::Georeference& georeference,
+                                           const GraphOptions& options,
+                                           const MapperOptions& mapper_options) {
+  if (!options.enabled || fixes.empty() || results.empty()) return std::nullopt;
+  graph::PoseGraphOptions solver;
+  solver.fix_gate_chi2 = options.fix_gate_chi2;
+  solver.fix_huber_sigmas = options.fix_huber_sigmas;
+  solver.max_gate_rounds = options.max_gate_rounds;
+  solver.min_fixes = options.min_gnss_fixes;
+  graph::Validate(solver);
+
+  GraphOutcome out;
+  out.fixes = fixes.size();
+  out.frame_fixes.resize(results.size());
+  const Eigen::Vector3d antenna(options.gnss_antenna_m.at(0), options.gnss_antenna_m.at(1),
+                                options.gnss_antenna_m.at(2));
+  std::vector<graph::PositionFactor> positions;
+  for (const io::GnssFix& fix : fixes) {
+    // The frame nearest in time (results are in time order).
+    const auto after =
+        std::lower_bound(results.begin(), results.end(), fix.timestamp,
+                         [](const FrameResult& r, double t) { return r.timestamp < t; });
+    std::size_t best = results.size();
+    double best_dt = options.gnss_max_time_offset_s;
+    for (auto it : {after, after == results.begin() ? after : after - 1}) {
+      if (it == results.end()) continue;
+      const double dt = std::abs(it->timestamp - fix.timestamp);
+      if (dt <= best_dt) {
+        best_dt = dt;
+        best = static_cast<std::size_t>(it - results.begin());
+      }
+    }
+    if (best == results.size()) {
+      ++out.unmatched;
+      continue;
+    }
+    graph::PositionFactor f;
+    f.node = best;
+    f.position_world =
+        georeference.GeodeticToEnu(fix.latitude_deg, fix.longitude_deg, fix.altitude_m);
+    f.covariance = fix.sigma_enu_m.cwiseAbs2().asDiagonal();
+    f.lever_arm_body = antenna;
+    out.frame_fixes[best].push_back(positions.size());
+    positions.push_back(f);
+  }
+  std::vector<Eigen::Isometry3d> initial;
+  initial.reserve(results.size());
+  for (const FrameResult& r : results) initial.push_back(r.step.T_world_body);
+  out.solution = graph::SolvePoseGraph(initial, RelativeFactors(results, sensor, mapper_options),
+                                       positions, solver);
+  return out;
+}
+
+std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,
+                         const std::vector<Eigen::Isometry3d>& T_world_body,
+                         const std::function<void(std::size_t, std::size_t)>& progress) {
+  mapper->ResetMaps();
+  const std::vector<FrameResult>& results = mapper->results();
+  std::size_t refused = 0;
+  for (std::size_t k = 0; k < results.size() && k < T_world_body.size(); ++k) {
+    if (results[k].status != FrameStatus::kBadFrame) {
+      try {
+        const io::Frame frame = source.Read(k);
+        const PreparedFrame prepared = mapper->Prepare(frame);
+        if (prepared.loaded.ok) {
+          ChainStep step = results[k].step;
+          step.T_world_body = T_world_body[k];
+          mapper->FuseAgain(prepared, step);
+        } else {
+          ++refused;
+        }
+      } catch (const io::IoError&) {
+        ++refused;  // read once, gone now: the rest of the map is still worth having
+      }
+    }
+    if (progress) progress(k + 1, results.size());
+  }
+  return refused;
+}
+
+}  // namespace rovermap::mapper

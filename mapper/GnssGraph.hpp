@@ -1,0 +1,58 @@
+#pragma once
+// The pose graph of a replay (docs/graph.md): the frames' chained increments with their
+// covariances, GNSS fixes as absolute position factors (graph/PoseGraph), and the maps fused
+// again from the optimised poses.
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "graph/PoseGraph.hpp"
+#include "io/FrameSource.hpp"
+#include "io/Georeference.hpp"
+#include "io/Gnss.hpp"
+#include "mapper/GraphOptions.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+/// What the graph made of a run.
+struct GraphOutcome {
+  graph::PoseGraphResult solution;  ///< T_world_body per frame (the chain's when not solved)
+  std::size_t fixes = 0;            ///< in the recording
+  std::size_t unmatched = 0;        ///< no frame within GraphOptions::gnss_max_time_offset_s
+  /// Per frame: its fixes' indices into solution.fix_used (empty: none).
+  std::vector<std::vector<std::size_t>> frame_fixes;
+  std::size_t frames_refused = 0;  ///< frames that could not be read again for the re-fusion
+};
+
+/// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
+/// registration's covariance plus the per-step σ of the stereo rig's systematic error
+/// (mapper.stereo_systematic_*; a white-noise stand-in for an error the graph does not model
+/// as repeating), or dead reckoning's noise (mapper.odometry_noise_*) where dead reckoning
+/// carried the step. Never throws.
+std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult>& results,
+                                                   io::SensorType sensor,
+                                                   const MapperOptions& options);
+
+/// Solves the graph of `results` with `fixes` (geodetic, placed in the world frame by
+/// `georeference`). nullopt when the graph is off or there are no fixes.
+/// @throw std::invalid_argument if the options are invalid.
+std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& results,
+                                           io::SensorType sensor,
+                                           const std::vector<io::GnssFix>& fixes,
+                                           const io::Georeference& georeference,
+                                           const GraphOptions& options,
+                                           const MapperOptions& mapper_options);
+
+/// Empties `mapper`'s DEM and OctoMap and fuses every frame it fused before again, read anew
+/// from `source` (random access), at `T_world_body` (one per result) with the chain's
+/// covariance. `progress(k, n)` after each frame. @return frames that could not be read again
+/// (left out of the maps). Never throws on data.
+std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,
+                         const std::vector<Eigen::Isometry3d>& T_world_body,
+                         const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+}  // namespace rovermap::mapper
