@@ -87,6 +87,7 @@ std::size_t WriteSequence(io::FrameSource* source, const fs::path& dir,
                             ": docs/design.md section 4.");
   io::WriteTum(dir / "odometry.tum", odometry);
   if (!truth.empty()) io::WriteTum(dir / "groundtruth.tum", truth);
+  if (!source->gnss().empty()) io::WriteGnssCsv(dir / "gnss.csv", source->gnss());
   io::SyncDirectory(dir);
   return unreadable;
 }
@@ -106,8 +107,9 @@ CLI::App* AddImportCommand(CLI::App* app, ImportArgs* args) {
   cmd->add_flag("--force", args->force, "Replace a non-empty SEQ");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
-      "Writes sequence.yaml, frames/, odometry.tum and groundtruth.tum (when the recording has\n"
-      "ground truth) into a temporary directory beside SEQ, then renames it to SEQ: a failure\n"
+      "Writes sequence.yaml, frames/, odometry.tum, groundtruth.tum (when the recording has\n"
+      "ground truth) and gnss.csv (NavSatFix fixes) into a temporary directory beside SEQ, then\n"
+      "renames it to SEQ: a failure\n"
       "leaves no SEQ. Prints a JSON summary on stdout; progress on stderr.\n"
       "Exit status: 0 written, 1 bad recording or cannot write, 2 usage or config error.\n");
   return cmd;
@@ -153,6 +155,7 @@ int RunImport(const ImportArgs& args) {
       {"frames", frames},
       {"sensor", source->info().sensor_type == io::SensorType::kCloud ? "cloud" : "stereo"},
       {"groundtruth", source->has_groundtruth()},
+      {"gnss_fixes", source->gnss().size()},
       {"dropped_nonfinite", dropped_nonfinite},
       {"skipped",
        {{"outside_pose_span", skipped.outside_pose_span},

@@ -17,7 +17,6 @@
 #include "core/Stopwatch.hpp"
 #include "io/FileUtil.hpp"
 #include "io/FrameSource.hpp"
-#include "io/Gnss.hpp"
 #include "io/IoError.hpp"
 #include "mapper/GnssGraph.hpp"
 #include "mapper/Mapper.hpp"
@@ -127,13 +126,6 @@ int RunReplay(const ReplayArgs& args) {
   }
   // Opening validates the whole recording (calibration, poses, frame files) before any output.
   const std::unique_ptr<io::FrameSource> source = OpenRecording(args.sequence, cfg, "replay");
-  // GNSS fixes beside a sequence directory (docs/graph.md), read before any output too.
-  std::vector<io::GnssFix> gnss;
-  const std::filesystem::path gnss_file = source->info().directory / "gnss.csv";
-  if (std::filesystem::is_directory(source->info().directory) &&
-      std::filesystem::exists(gnss_file)) {
-    gnss = io::ReadGnssCsv(gnss_file);
-  }
   std::unique_ptr<mapper::Mapper> mapper;
   try {
     mapper = std::make_unique<mapper::Mapper>(source->info(), PipelineFrom(cfg));
@@ -168,7 +160,7 @@ int RunReplay(const ReplayArgs& args) {
   // are fused again from its poses (a second pass over the recording).
   std::optional<mapper::GraphOutcome> graph;
   try {
-    graph = mapper::SolveGnssGraph(mapper->results(), source->info().sensor_type, gnss,
+    graph = mapper::SolveGnssGraph(mapper->results(), source->info().sensor_type, source->gnss(),
                                    mapper->georeference(), cfg.graph, cfg.mapper);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());

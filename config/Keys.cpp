@@ -453,7 +453,10 @@ std::vector<KeyEntry> BuildRegistry() {
   bag.Name("groundtruth_topic", &B::groundtruth_topic, true,
            "nav_msgs/Odometry or geometry_msgs/PoseStamped; \"\" = none");
   bag.Name("navsat_topic", &B::navsat_topic, false,
-           "sensor_msgs/NavSatFix: its first fix is the origin unless origin_* are set");
+           "sensor_msgs/NavSatFix: its first fix is the origin unless origin_* are set; every fix "
+           "a GNSS fix of the pose graph");
+  bag.Double("navsat_sigma_m", &B::navsat_sigma_m, "m", GreaterThan(0),
+             "sigma east, north and up of a NavSatFix whose covariance is unknown");
   bag.Enum<bool>("T_body_sensor_source", &B::T_body_sensor_from_tf_static, kTBodySensorSourceNames,
                  "the keys below, or /tf_static body_frame -> sensor_frame");
   bag.Name("body_frame", &B::body_frame, false, "T_body_sensor_source: tf_static");

@@ -104,6 +104,10 @@ struct NavSatFixMsg {
   double latitude = 0.0;
   double longitude = 0.0;
   double altitude = 0.0;
+  /// [m²] row-major, east north up; read only when `covariance_type` > 0 (known or
+  /// approximated).
+  std::array<double, 9> position_covariance{};
+  std::uint8_t covariance_type = 0;
 };
 
 /// sensor_msgs PointField datatypes rovermap reads.

@@ -34,8 +34,11 @@ struct BagOptions {
   std::string odometry_child_frame = "base_link";
   /// nav_msgs/Odometry or geometry_msgs/PoseStamped; empty = no ground truth.
   std::string groundtruth_topic;
-  /// sensor_msgs/NavSatFix, for the origin when `origin` is not set.
+  /// sensor_msgs/NavSatFix: the origin when `origin` is not set, and the GNSS fixes of the
+  /// pose graph (docs/graph.md).
   std::string navsat_topic = "/fix";
+  /// [m] σ east, north and up of a fix whose covariance is unknown (position_covariance_type 0).
+  double navsat_sigma_m = 5.0;
   /// T_body_sensor from /tf_static (body_frame -> sensor_frame, chained over static
   /// transforms), else `T_body_sensor`.
   bool T_body_sensor_from_tf_static = false;

@@ -324,6 +324,7 @@ struct BagContents::Collected {
   std::vector<StaticEdge> statics;
   std::set<std::string> tf_pairs;  // "parent -> child" on /tf other than the odometry's
   std::optional<GeodeticOrigin> fix;
+  std::vector<GnssFix> gnss;      // every usable NavSatFix
   std::vector<MessageRef> lefts;  // stereo images, or clouds (in lefts), by stamp
   std::vector<MessageRef> rights;
 };
@@ -374,7 +375,7 @@ std::vector<std::string> BagContents::TopicsToRead(
        {o.odometry_from_tf ? types_.tf : types_.odometry});
   if (!o.groundtruth_topic.empty()) want(o.groundtruth_topic, {types_.odometry, types_.pose});
   if (o.T_body_sensor_from_tf_static) want(kTfStaticTopic, {types_.tf});
-  if (!o.origin && types.count(o.navsat_topic) != 0) want(o.navsat_topic, {types_.navsat});
+  if (types.count(o.navsat_topic) != 0) want(o.navsat_topic, {types_.navsat});
   return topics;
 }
 
@@ -391,7 +392,7 @@ Role BagContents::RoleOf(const std::string& topic) const {
   if (topic == kTfStaticTopic || (o.odometry_from_tf && topic == kTfTopic)) return Role::kTf;
   if (topic == o.odometry_topic && !o.odometry_from_tf) return Role::kOdometry;
   if (topic == o.groundtruth_topic) return Role::kGroundTruth;
-  if (topic == o.navsat_topic && !c_->fix) return Role::kNavSat;
+  if (topic == o.navsat_topic) return Role::kNavSat;
   return Role::kNone;
 }
 
@@ -459,11 +460,23 @@ void BagContents::AddGroundTruth(const PoseMsg& msg) {
 }
 
 void BagContents::AddNavSatFix(const NavSatFixMsg& msg) {
-  if (c_->fix) return;
   const bool usable = msg.status >= kStatusFix && std::isfinite(msg.latitude) &&
                       std::isfinite(msg.longitude) && std::isfinite(msg.altitude) &&
                       std::abs(msg.latitude) <= 90.0 && std::abs(msg.longitude) <= 180.0;
-  if (usable) c_->fix = GeodeticOrigin{msg.latitude, msg.longitude, msg.altitude};
+  if (!usable) return;
+  if (!c_->fix) c_->fix = GeodeticOrigin{msg.latitude, msg.longitude, msg.altitude};
+  GnssFix f;
+  f.timestamp = msg.stamp.ToSec();
+  f.latitude_deg = msg.latitude;
+  f.longitude_deg = msg.longitude;
+  f.altitude_m = msg.altitude;
+  // The receiver's own covariance (east, north, up on the diagonal) when it gives one.
+  const auto& c = msg.position_covariance;
+  const bool known = msg.covariance_type > 0 && std::isfinite(c[0]) && std::isfinite(c[4]) &&
+                     std::isfinite(c[8]) && c[0] > 0.0 && c[4] > 0.0 && c[8] > 0.0;
+  f.sigma_enu_m = known ? Eigen::Vector3d(std::sqrt(c[0]), std::sqrt(c[4]), std::sqrt(c[8]))
+                        : Eigen::Vector3d::Constant(options_.navsat_sigma_m);
+  c_->gnss.push_back(f);
 }
 
 namespace {
@@ -574,6 +587,15 @@ BagPlan BagContents::Finish() {
   const std::optional<CameraModel> camera = CheckContents(c, options_, types_, name_);
   BagPlan plan = PlanFrames(c, options_, name_);
   plan.info = Describe(file_, c, options_, camera, plan.odometry);
+  // Fixes by time, one per stamp (a receiver that repeats a stamp gives the pose graph nothing
+  // new).
+  plan.gnss = c.gnss;
+  std::stable_sort(plan.gnss.begin(), plan.gnss.end(),
+                   [](const GnssFix& a, const GnssFix& b) { return a.timestamp < b.timestamp; });
+  plan.gnss.erase(
+      std::unique(plan.gnss.begin(), plan.gnss.end(),
+                  [](const GnssFix& a, const GnssFix& b) { return a.timestamp == b.timestamp; }),
+      plan.gnss.end());
   return plan;
 }
 
@@ -584,6 +606,7 @@ void BagFrameSource::Adopt(BagPlan plan) {
   frames_ = std::move(plan.frames);
   odometry_ = std::move(plan.odometry);
   groundtruth_ = std::move(plan.groundtruth);
+  gnss_ = std::move(plan.gnss);
   skipped_ = plan.skipped;
   info_ = std::move(plan.info);
 }

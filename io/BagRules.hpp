@@ -17,6 +17,7 @@
 #include "io/BagMessages.hpp"
 #include "io/BagOptions.hpp"
 #include "io/FrameSource.hpp"
+#include "io/Gnss.hpp"
 #include "registration/PointCloud.hpp"
 
 namespace rovermap::io::bag {
@@ -54,6 +55,7 @@ enum class Role { kNone, kImage, kCloud, kCameraInfo, kTf, kOdometry, kGroundTru
 /// poses, what was skipped, and the sequence's description.
 struct BagPlan {
   std::vector<std::pair<MessageRef, MessageRef>> frames;
+  std::vector<GnssFix> gnss;  ///< every NavSatFix with a fix, by time
   std::vector<StampedPose> odometry;
   std::vector<StampedPose> groundtruth;  ///< empty, or one per frame
   SkippedFrames skipped;

@@ -86,7 +86,11 @@ std::vector<bag::TransformMsg> ToBag(const tf2_msgs::TFMessage& m) {
 }
 
 bag::NavSatFixMsg ToBag(const sensor_msgs::NavSatFix& m) {
-  return {StampOf(m.header.stamp), m.status.status, m.latitude, m.longitude, m.altitude};
+  bag::NavSatFixMsg msg{StampOf(m.header.stamp), m.status.status, m.latitude, m.longitude,
+                        m.altitude};
+  for (std::size_t i = 0; i < 9; ++i) msg.position_covariance[i] = m.position_covariance[i];
+  msg.covariance_type = m.position_covariance_type;
+  return msg;
 }
 
 // The message `m` as a T. @throw IoError naming the bag if it is not one (a topic recorded

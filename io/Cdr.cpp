@@ -255,6 +255,8 @@ bag::NavSatFixMsg DecodeNavSatFix(ByteView data, const std::string& what) {
   msg.latitude = r.F64("latitude");
   msg.longitude = r.F64("longitude");
   msg.altitude = r.F64("altitude");
+  for (double& v : msg.position_covariance) v = r.F64("position_covariance");
+  msg.covariance_type = r.U8("position_covariance_type");
   return msg;
 }
 

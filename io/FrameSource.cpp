@@ -27,6 +27,11 @@ Frame IndexedFrameSource::Read(std::size_t index) const {
   return frame;
 }
 
+const std::vector<GnssFix>& FrameSource::gnss() const {
+  static const std::vector<GnssFix> none;
+  return none;
+}
+
 bool IndexedFrameSource::Next(Frame* frame) {
   if (next_ >= odometry_.size()) return false;
   const std::size_t index = next_++;

@@ -10,6 +10,7 @@
 
 #include "io/BagOptions.hpp"
 #include "io/Frame.hpp"
+#include "io/Gnss.hpp"
 #include "io/Tum.hpp"
 
 namespace rovermap::io {
@@ -34,6 +35,8 @@ class FrameSource {
   /// Empty, or one pose per frame like odometry().
   virtual const std::vector<StampedPose>& groundtruth() const = 0;
   bool has_groundtruth() const { return !groundtruth().empty(); }
+  /// GNSS fixes by time (a sequence's gnss.csv, a bag's NavSatFix messages); empty if none.
+  virtual const std::vector<GnssFix>& gnss() const;
   virtual SkippedFrames skipped() const { return {}; }
 
   /// Reads the next frame into `frame` (replacing its contents).
@@ -62,6 +65,7 @@ class IndexedFrameSource : public FrameSource {
   std::size_t next_index() const override { return next_; }
   const std::vector<StampedPose>& odometry() const override { return odometry_; }
   const std::vector<StampedPose>& groundtruth() const override { return groundtruth_; }
+  const std::vector<GnssFix>& gnss() const override { return gnss_; }
   bool Next(Frame* frame) final;
   Frame Read(std::size_t index) const final;
 
@@ -73,6 +77,7 @@ class IndexedFrameSource : public FrameSource {
   SequenceInfo info_;
   std::vector<StampedPose> odometry_;
   std::vector<StampedPose> groundtruth_;  ///< empty, or one per frame
+  std::vector<GnssFix> gnss_;
   std::size_t next_ = 0;
 };
 

@@ -11,8 +11,8 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
-#include "io/Rpy.hpp"
 #include "io/PointCloudIo.hpp"
+#include "io/Rpy.hpp"
 #include "io/SequenceYaml.hpp"
 
 namespace rovermap::io {
@@ -36,7 +36,8 @@ bool ParseFrameFileName(const std::string& name, std::size_t* index, std::string
     if (name[i] < '0' || name[i] > '9') return false;
   }
   const std::string rest = name.substr(dot + 1);
-  if (rest != "left.png" && rest != "right.png" && rest != "ply" && rest != "odom" && rest != "gt") {
+  if (rest != "left.png" && rest != "right.png" && rest != "ply" && rest != "odom" &&
+      rest != "gt") {
     return false;
   }
   *index = std::stoul(name.substr(0, dot));
@@ -158,6 +159,10 @@ SequenceReader::SequenceReader(const fs::path& sequence_dir) {
   }
   odometry_ = ReadTum(odometry_file);
   if (odometry_.empty()) throw IoError(odometry_file.string() + ": no poses");
+
+  // GNSS fixes for the pose graph (docs/graph.md), checked with the rest before any frame.
+  const fs::path gnss_file = sequence_dir / "gnss.csv";
+  if (fs::exists(gnss_file, error)) gnss_ = ReadGnssCsv(gnss_file);
 
   const fs::path truth_file = sequence_dir / "groundtruth.tum";
   if (fs::exists(truth_file, error)) {

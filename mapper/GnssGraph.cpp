@@ -45,7 +45,11 @@ std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& resul
                                            const io::Georeference& georeference,
                                            const GraphOptions& options,
                                            const MapperOptions& mapper_options) {
-  if (!options.enabled || fixes.empty() || results.empty()) return std::nullopt;
+  // A fix or two (a bag's origin fix) are no track to hold the trajectory to.
+  if (!options.enabled || results.empty() ||
+      fixes.size() < static_cast<std::size_t>(std::max(options.min_gnss_fixes, 1))) {
+    return std::nullopt;
+  }
   graph::PoseGraphOptions solver;
   solver.fix_gate_chi2 = options.fix_gate_chi2;
   solver.fix_huber_sigmas = options.fix_huber_sigmas;

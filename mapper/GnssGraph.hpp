@@ -38,7 +38,8 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
                                                    const MapperOptions& options);
 
 /// Solves the graph of `results` with `fixes` (geodetic, placed in the world frame by
-/// `georeference`). nullopt when the graph is off or there are no fixes.
+/// `georeference`). nullopt when the graph is off or there are fewer fixes than
+/// GraphOptions::min_gnss_fixes (a bag's single origin fix is no track).
 /// @throw std::invalid_argument if the options are invalid.
 std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& results,
                                            io::SensorType sensor,

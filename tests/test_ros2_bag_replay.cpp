@@ -8,7 +8,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
+#include "io/Gnss.hpp"
 #include "io/Sequence.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/ErrorText.hpp"
@@ -162,3 +164,40 @@ TEST_F(Ros2BagReplay, ABadBagStopsBeforeAnyOutput) {
 }
 
 }  // namespace
+
+// Every NavSatFix with a fix is a GNSS fix of the pose graph (docs/graph.md), with the σ of its
+// covariance when it gives one (else bag.navsat_sigma_m); `import` writes them to gnss.csv, and
+// the imported sequence replays as the bag.
+TEST_F(Ros2BagReplay, NavSatFixesHoldTheGraphAndImportWritesThem) {
+  const fs::path tiny_cloud = kData / "sim_tiny_cloud";
+  Ros2Recording how;
+  how.navsat_track_sigma_m = 0.02;  // one fix of the true position with every frame
+  const fs::path bag = WriteSequenceRos2Bag(tiny_cloud, dir_ / "fixes.mcap", how);
+  const std::string keys = kBagKeys + " --set bag.sensor=cloud";
+  const nlohmann::json summary = Replay(bag, "bag", keys);
+  ASSERT_TRUE(summary.contains("graph")) << summary.dump();
+  // Five frames, five fixes: the origin's (no covariance: 5 m) stands for frame 0's, which has
+  // the same stamp.
+  EXPECT_EQ(summary["graph"]["gnss_fixes"], 5);
+  EXPECT_EQ(summary["graph"]["gnss_used"], 5);
+  EXPECT_TRUE(summary["graph"]["solved"].get<bool>());
+  EXPECT_TRUE(fs::exists(dir_ / "bag" / "trajectory_f2f.tum"));
+
+  const fs::path seq = dir_ / "imported";
+  const CommandResult r =
+      Rovermap("import " + bag.string() + " --out " + seq.string() + " " + keys);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["gnss_fixes"], 5);
+  const std::vector<rovermap::io::GnssFix> fixes = rovermap::io::ReadGnssCsv(seq / "gnss.csv");
+  ASSERT_EQ(fixes.size(), 5u);
+  EXPECT_EQ(fixes[0].sigma_enu_m, Eigen::Vector3d::Constant(5.0));
+  EXPECT_NEAR(fixes[1].sigma_enu_m.x(), 0.02, 1e-12);
+  EXPECT_NEAR(fixes[1].sigma_enu_m.z(), 0.02, 1e-12);
+  Replay(seq, "seq");
+  for (const char* file : {"trajectory.tum", "trajectory_f2f.tum", "dem.tif"}) {
+    EXPECT_EQ(Slurp(dir_ / "seq" / file), Slurp(dir_ / "bag" / file)) << file;
+  }
+  // Without the track (the origin's fix alone) there is no graph.
+  const fs::path origin_only = WriteSequenceRos2Bag(tiny_cloud, dir_ / "origin.mcap");
+  EXPECT_FALSE(Replay(origin_only, "origin", keys).contains("graph"));
+}

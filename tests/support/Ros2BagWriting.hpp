@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "io/BagOptions.hpp"
+#include "io/Georeference.hpp"
 #include "io/Sequence.hpp"
 #include "registration/PointCloud.hpp"
 
@@ -217,15 +218,17 @@ struct Cdr {
     return w.bytes();
   }
 
-  Bytes NavSatFix(double latitude, double longitude, double altitude, double t,
-                  std::int8_t status) const {
+  /// `sigma_m` > 0: a diagonal covariance of that σ (position_covariance_type 2, diagonal
+  /// known); else none (type 0, unknown).
+  Bytes NavSatFix(double latitude, double longitude, double altitude, double t, std::int8_t status,
+                  double sigma_m = 0.0) const {
     CdrWriter w(big_endian);
     w.Header(t, "gps");
     w.Put<std::int8_t>(status);
     w.Put<std::uint16_t>(1);
     for (const double v : {latitude, longitude, altitude}) w.Put<double>(v);
-    for (int i = 0; i < 9; ++i) w.Put<double>(0.0);
-    w.Put<std::uint8_t>(0);
+    for (int i = 0; i < 9; ++i) w.Put<double>(i % 4 == 0 ? sigma_m * sigma_m : 0.0);
+    w.Put<std::uint8_t>(sigma_m > 0.0 ? 2 : 0);
     return w.bytes();
   }
 
@@ -534,6 +537,10 @@ struct Ros2Recording {
   std::string groundtruth_topic = "/groundtruth";  ///< PoseStamped; empty: none
   bool tf_static = true;  ///< base_link -> mast -> stereo_left on /tf_static
   bool navsat = true;     ///< the origin as a NavSatFix (after one without a fix)
+  /// > 0: a NavSatFix of the true body position with every frame, of this σ (and its
+  /// covariance), `navsat_offset_m` east of the truth (a datum the fixes disagree with).
+  double navsat_track_sigma_m = 0.0;
+  double navsat_offset_m = 0.0;
   /// Changes a message just before it is written (topic, its CDR bytes).
   std::function<void(const std::string& topic, Bytes* data)> edit;
 };
@@ -597,6 +604,13 @@ inline std::filesystem::path WriteSequenceRos2Bag(const std::filesystem::path& s
     if (!how.groundtruth_topic.empty() && k < truth.size()) {
       write(how.groundtruth_topic, "geometry_msgs/msg/PoseStamped", t,
             cdr.PoseStamped(truth[k], t));
+    }
+    if (how.navsat_track_sigma_m > 0.0 && k < truth.size()) {
+      const io::Georeference georef(info.origin);
+      const Eigen::Vector3d p = truth[k].t + Eigen::Vector3d(how.navsat_offset_m, 0.0, 0.0);
+      const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
+      write(topics.navsat_topic, "sensor_msgs/msg/NavSatFix", t,
+            cdr.NavSatFix(geo.x(), geo.y(), geo.z(), t, 0, how.navsat_track_sigma_m));
     }
     if (info.sensor_type == io::SensorType::kCloud) {
       write(topics.cloud_topic, "sensor_msgs/msg/PointCloud2", t,
