@@ -226,7 +226,10 @@ nlohmann::json GraphJson(const GraphOutcome& graph) {
 }
 
 void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
-                    const std::optional<DriftMetrics>& drift, bool chain_sigma) {
+                    const std::optional<DriftMetrics>& drift, const GraphOutcome* graph,
+                    const std::optional<DriftMetrics>& chained) {
+  const bool graph_solved = graph != nullptr && graph->solution.solved;
+  const bool chain_sigma = !graph_solved;
   using namespace eval::plot;
   const cv::Scalar kRed(40, 40, 210);
   std::vector<double> index, dt, dr, fallback_index;
@@ -284,18 +287,49 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     const auto& odo = drift->odometry;
     // One error per frame when every frame has ground truth; else no σ line.
     const bool with_sigma = chain_sigma && reg.distance_m.size() == two_sigma.size();
+    const bool chained_ok =
+        graph_solved && chained && chained->registered.status == eval::MetricStatus::kOk;
+    const std::size_t legend_lines =
+        2 + (with_sigma ? 1 : 0) + (chained_ok ? 1 : 0) + (graph != nullptr ? 2 : 0);
     const double y1 = std::max({peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m),
-                                with_sigma ? peak(two_sigma) : 0.0}) *
-                      LegendHeadroom(area.height, with_sigma ? 3 : 2);
+                                with_sigma ? peak(two_sigma) : 0.0,
+                                chained_ok ? peak(chained->registered.ate_origin_error_m) : 0.0}) *
+                      LegendHeadroom(area.height, legend_lines);
     const Axes axes{area, 0.0, std::max(reg.distance_m.back(), 1e-6), 0.0, y1};
     DrawAxes(img, axes, "distance travelled (ground truth) [m]",
              "position error against the ground truth, aligned at the first pose [m]");
     DrawLine(img, axes, odo.distance_m, odo.ate_origin_error_m, Colour(0), 2);
     if (with_sigma) DrawLine(img, axes, reg.distance_m, two_sigma, sigma_colour, 1);
+    const bool with_chained =
+        chained_ok && chained->registered.distance_m.size() == reg.distance_m.size();
+    if (with_chained) {
+      DrawLine(img, axes, reg.distance_m, chained->registered.ate_origin_error_m, Colour(4), 1);
+    }
     DrawLine(img, axes, reg.distance_m, reg.ate_origin_error_m, Colour(1), 2);
     legend = {{"dead reckoning (ATE origin " + Format(odo.ate_origin_m.rmse) + " m)", Colour(0)},
-              {"registered (ATE origin " + Format(reg.ate_origin_m.rmse) + " m)", Colour(1)}};
+              {std::string(graph_solved ? "pose graph" : "registered") + " (ATE origin " +
+                   Format(reg.ate_origin_m.rmse) + " m)",
+               Colour(1)}};
+    if (with_chained) {
+      legend.emplace_back(
+          "frame to frame (ATE origin " + Format(chained->registered.ate_origin_m.rmse) + " m)",
+          Colour(4));
+    }
     if (with_sigma) legend.emplace_back(sigma_label, sigma_colour);
+    // Where the GNSS fixes were: one tick per frame with a fix, at its distance.
+    if (graph != nullptr && reg.distance_m.size() == results.size()) {
+      const cv::Scalar used(60, 170, 60), rejected(200, 0, 200);
+      for (std::size_t k = 0; k < results.size() && k < graph->frame_fixes.size(); ++k) {
+        if (graph->frame_fixes[k].empty()) continue;
+        bool any_used = false;
+        for (const std::size_t f : graph->frame_fixes[k])
+          any_used = any_used || (graph_solved && graph->solution.fix_used[f]);
+        const cv::Point p = axes.Map(reg.distance_m[k], axes.y0);
+        cv::line(img, p, p - cv::Point(0, 10), any_used ? used : rejected, 2);
+      }
+      legend.emplace_back("GNSS fix used (tick)", used);
+      legend.emplace_back("GNSS fix rejected (tick)", rejected);
+    }
   } else {
     std::vector<double> distance, correction;
     double travelled = 0.0;

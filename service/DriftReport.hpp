@@ -65,10 +65,12 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
 /// the drift against distance travelled: position error against the ground truth (registered
 /// and dead reckoning, aligned at the first pose) when `drift` is given, else the cumulative
 /// correction. Written atomically. @throw io::IoError naming `path`.
-/// `chain_sigma`: draw the chain's 2σ (false when `drift` judges another trajectory than the
-/// chained one, the pose graph's).
+/// With a solved pose graph (`graph`, `drift` judging its trajectory): the chained trajectory's
+/// error too (`chained`), no 2σ line (the chain's σ is not the graph's), and ticks where the
+/// frames' GNSS fixes were used (green) or rejected (magenta).
 void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameResult>& results,
-                    const std::optional<DriftMetrics>& drift, bool chain_sigma = true);
+                    const std::optional<DriftMetrics>& drift, const GraphOutcome* graph = nullptr,
+                    const std::optional<DriftMetrics>& chained = std::nullopt);
 
 /// Peak resident set size of this process [MB] (getrusage).
 double PeakRssMb();

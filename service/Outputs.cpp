@@ -130,7 +130,9 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   done("dem.png");
   nlohmann::json terrain = WriteTerrain(out_dir, state, drawn, done, terrain_cache);
   const std::optional<DriftMetrics> drift = EvaluateDrift(results, eval_options, optimised);
-  WriteDriftPlot(out_dir / "drift.png", results, drift, /*chain_sigma=*/optimised == nullptr);
+  const std::optional<DriftMetrics> chained_drift =
+      optimised ? EvaluateDrift(results, eval_options) : std::nullopt;
+  WriteDriftPlot(out_dir / "drift.png", results, drift, graph, chained_drift);
   done("drift.png");
 
   run.write_ms = core::MsSince(start);
@@ -139,10 +141,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   summary["terrain"] = std::move(terrain);
   if (graph != nullptr) {
     summary["graph"] = GraphJson(*graph);
-    if (optimised && drift) {
-      if (const auto chained_drift = EvaluateDrift(results, eval_options)) {
-        summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);
-      }
+    if (optimised && drift && chained_drift) {
+      summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);
     }
   }
   io::WriteFileAtomically(out_dir / "summary.json", summary.dump(2) + "\n");
