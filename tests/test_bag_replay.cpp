@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "io/Gnss.hpp"
 #include "io/PointCloudIo.hpp"
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
@@ -348,4 +349,30 @@ TEST_F(BagReplay, AFrameThatCannotBeDecodedIsLeftOutOfAnImport) {
   const rovermap::io::SequenceReader imported(seq);
   ASSERT_EQ(imported.frame_count(), 2u);
   EXPECT_NEAR(imported.odometry()[1].timestamp, rovermap::testing::kBagTimeOffset + 1.0, 1e-9);
+}
+
+// ROS 1 as ROS 2 (Ros2BagReplay.NavSatFixesHoldTheGraphAndImportWritesThem): a NavSatFix with
+// every frame, its covariance given, is a fix of the pose graph with that σ; the origin's fix
+// without a covariance (a tenth of a second before the first frame) gets bag.navsat_sigma_m and
+// no frame (`gnss_unmatched`). import writes them to gnss.csv.
+TEST_F(BagReplay, NavSatFixesHoldTheGraphAndImportWritesThem) {
+  BagRecording how;
+  how.navsat_track_sigma_m = 0.02;
+  const fs::path bag = Bag("fixes.bag", how, kTinyCloud);
+  const std::string keys = kBagKeys + " --set bag.sensor=cloud";
+  CommandResult r =
+      Rovermap("replay " + bag.string() + " --out " + (dir_ / "out").string() + " " + keys);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json graph = nlohmann::json::parse(r.out)["graph"];
+  EXPECT_EQ(graph["gnss_fixes"], 6) << graph.dump();
+  EXPECT_EQ(graph["gnss_unmatched"], 1);
+  EXPECT_EQ(graph["gnss_used"], 5);
+  EXPECT_TRUE(graph["solved"].get<bool>());
+  const fs::path seq = dir_ / "seq";
+  r = Rovermap("import " + bag.string() + " --out " + seq.string() + " " + keys);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<rovermap::io::GnssFix> fixes = rovermap::io::ReadGnssCsv(seq / "gnss.csv");
+  ASSERT_EQ(fixes.size(), 6u);
+  EXPECT_EQ(fixes[0].sigma_enu_m, Eigen::Vector3d::Constant(5.0));
+  EXPECT_NEAR(fixes[3].sigma_enu_m.y(), 0.02, 1e-12);
 }

@@ -25,6 +25,7 @@
 
 #include "io/BagOptions.hpp"
 #include "io/CameraModel.hpp"
+#include "io/Georeference.hpp"
 #include "io/Sequence.hpp"
 #include "registration/PointCloud.hpp"
 
@@ -202,6 +203,9 @@ struct BagRecording {
   std::size_t truth_frames = std::numeric_limits<std::size_t>::max();  ///< of the first frames
   bool tf_static = true;  ///< base_link -> mast -> stereo_left on /tf_static
   bool navsat = true;     ///< the origin as a NavSatFix (after one without a fix)
+  /// > 0: also a NavSatFix of the true body position with every frame, with a diagonal
+  /// covariance of this σ (position_covariance_type 2).
+  double navsat_track_sigma_m = 0.0;
   /// Changes the camera info just before writing (e.g. to make it unrectified).
   std::function<void(sensor_msgs::CameraInfo* left, sensor_msgs::CameraInfo* right)> edit_info;
 };
@@ -263,6 +267,16 @@ inline std::filesystem::path WriteSequenceBag(const std::filesystem::path& seque
     }
     if (!how.groundtruth_topic.empty() && frame.T_world_body_truth && k < how.truth_frames) {
       bag.write(how.groundtruth_topic, time, PoseMsg(*frame.T_world_body_truth, t));
+    }
+    if (how.navsat_track_sigma_m > 0.0 && frame.T_world_body_truth) {
+      const Eigen::Vector3d p = frame.T_world_body_truth->translation();
+      const Eigen::Vector3d geo = io::Georeference(info.origin).EnuToGeodetic(p.x(), p.y(), p.z());
+      sensor_msgs::NavSatFix fix = FixMsg(geo.x(), geo.y(), geo.z(), t);
+      for (std::size_t i = 0; i < 9; i += 4) {
+        fix.position_covariance[i] = how.navsat_track_sigma_m * how.navsat_track_sigma_m;
+      }
+      fix.position_covariance_type = sensor_msgs::NavSatFix::COVARIANCE_TYPE_DIAGONAL_KNOWN;
+      bag.write(topics.navsat_topic, time, fix);
     }
     if (info.sensor_type == io::SensorType::kCloud) {
       bag.write(topics.cloud_topic, time, CloudMsg(frame.cloud, how.cloud_float64, t));
