@@ -83,9 +83,10 @@ void ReportHeadline(const nlohmann::json& s, const std::filesystem::path& out) {
          << " m, dead reckoning " << ate("odometry", "ate_rmse_origin_m") << " / "
          << ate("odometry", "ate_rmse_m") << " m\n";
   }
+  const bool graph = s.contains("graph") && s["graph"].value("solved", false);
   line << "replay: outputs in " << out.string()
-       << ": dem.tif dem.png terrain.tif terrain.png map.bt trajectory.tum odometry.tum drift.csv "
-          "drift.png summary.json\n";
+       << ": dem.tif dem.png terrain.tif terrain.png map.bt trajectory.tum "
+       << (graph ? "trajectory_f2f.tum " : "") << "odometry.tum drift.csv drift.png summary.json\n";
   std::cerr << line.str();
 }
 

@@ -280,6 +280,7 @@ TEST_F(GnssInput, FixesThatAgreeAreUsedAndTheMapsFusedAgain) {
   EXPECT_EQ(s["graph"]["frames_not_refused"], 0);
   EXPECT_TRUE(fs::exists(out / "trajectory_f2f.tum"));
   EXPECT_NE(r.err.find("fusing the maps again from the pose graph"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("trajectory.tum trajectory_f2f.tum"), std::string::npos) << r.err;
   // The maps hold every frame again: about as many cells as without the graph.
   const CommandResult plain =
       Rovermap("replay " + kTinyCloud.string() + " --out " + (dir_ / "plain").string());
