@@ -74,40 +74,45 @@ void LeftError(const Eigen::Quaternion<T>& q_est, const Eigen::Matrix<T, 3, 1>& 
   e[5] = t_d.z();
 }
 
-// Relative factor: T_est = T_i⁻¹ T_j against the measured increment.
-struct RelativeCost {
+// A measured pose with its whitening: the residual of an estimate is L·[log(R_D); t_D].
+struct PoseMeasurement {
   Eigen::Quaterniond q_meas;
   Eigen::Vector3d t_meas;
   Matrix6d sqrt_information;
 
   template <typename T>
-  bool operator()(const T* qi, const T* ti, const T* qj, const T* tj, T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> Qi(qi), Qj(qj);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ti(ti), Tj(tj);
-    const Eigen::Quaternion<T> q_est = Qi.conjugate() * Qj;
-    const Eigen::Matrix<T, 3, 1> t_est = Qi.conjugate() * (Tj - Ti);
+  void Whitened(const Eigen::Quaternion<T>& q_est, const Eigen::Matrix<T, 3, 1>& t_est,
+                T* residual) const {
     Eigen::Matrix<T, 6, 1> e;
     LeftError(q_est, t_est, q_meas, t_meas, e.data());
     Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
     out = sqrt_information.cast<T>() * e;
+  }
+};
+
+// Relative factor: T_est = T_i⁻¹ T_j against the measured increment.
+struct RelativeCost {
+  PoseMeasurement measured;
+
+  template <typename T>
+  bool operator()(const T* qi, const T* ti, const T* qj, const T* tj, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Qi(qi), Qj(qj);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ti(ti), Tj(tj);
+    measured.Whitened(Eigen::Quaternion<T>(Qi.conjugate() * Qj),
+                      Eigen::Matrix<T, 3, 1>(Qi.conjugate() * (Tj - Ti)), residual);
     return true;
   }
 };
 
 // Prior on a node's whole pose, in the world frame.
 struct PriorCost {
-  Eigen::Quaterniond q_meas;
-  Eigen::Vector3d t_meas;
-  Matrix6d sqrt_information;
+  PoseMeasurement measured;
 
   template <typename T>
   bool operator()(const T* q, const T* t, T* residual) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> Q(q);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Tt(t);
-    Eigen::Matrix<T, 6, 1> e;
-    LeftError(Eigen::Quaternion<T>(Q), Eigen::Matrix<T, 3, 1>(Tt), q_meas, t_meas, e.data());
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
-    out = sqrt_information.cast<T>() * e;
+    measured.Whitened(Eigen::Quaternion<T>(Eigen::Map<const Eigen::Quaternion<T>>(q)),
+                      Eigen::Matrix<T, 3, 1>(Eigen::Map<const Eigen::Matrix<T, 3, 1>>(t)),
+                      residual);
     return true;
   }
 };
@@ -213,16 +218,17 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       problem.AddParameterBlock(node.t, 3);
     }
     const Node first = ToNode(initial.front());
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost{
-                                 Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
-                                 initial.front().translation(), prior_L}),
-                             nullptr, nodes.front().q, nodes.front().t);
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(
+            new PriorCost{{Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
+                           initial.front().translation(), prior_L}}),
+        nullptr, nodes.front().q, nodes.front().t);
     for (std::size_t k = 0; k < relative.size(); ++k) {
       const RelativeFactor& f = relative[k];
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(
-              new RelativeCost{Eigen::Quaterniond(f.T_from_to.linear()).normalized(),
-                               f.T_from_to.translation(), relative_L[k]}),
+              new RelativeCost{{Eigen::Quaterniond(f.T_from_to.linear()).normalized(),
+                                f.T_from_to.translation(), relative_L[k]}}),
           nullptr, nodes[f.from].q, nodes[f.from].t, nodes[f.to].q, nodes[f.to].t);
     }
     std::size_t used = 0;

@@ -1,6 +1,5 @@
 #include "io/Gnss.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -9,15 +8,15 @@
 
 #include "io/FileUtil.hpp"
 #include "io/IoError.hpp"
+#include "io/detail/TextParse.hpp"
 
 namespace rovermap::io {
 namespace {
 
-std::string Trimmed(std::string s) {
-  while (!s.empty() && (s.back() == '\r' || s.back() == ' ' || s.back() == '\t')) s.pop_back();
-  std::size_t i = 0;
-  while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
-  return s.substr(i);
+std::string_view Trimmed(std::string_view s) {
+  while (!s.empty() && detail::IsBlank(s.back())) s.remove_suffix(1);
+  while (!s.empty() && detail::IsBlank(s.front())) s.remove_prefix(1);
+  return s;
 }
 
 }  // namespace
@@ -25,68 +24,54 @@ std::string Trimmed(std::string s) {
 std::vector<GnssFix> ParseGnssCsv(std::string_view text, const std::filesystem::path& path) {
   std::vector<GnssFix> fixes;
   bool header = false;
-  int line_number = 0;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string_view::npos) end = text.size();
-    ++line_number;
-    std::string line(text.substr(start, end - start));
-    start = end + 1;
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
-    line = Trimmed(line);
-    if (line.empty()) {
-      if (end == text.size()) break;
-      continue;
-    }
-    const std::string where = path.string() + ":" + std::to_string(line_number) + ": ";
+  detail::LineCursor cursor(text);
+  for (std::string_view raw; cursor.Next(&raw);) {
+    const std::string_view line = Trimmed(detail::StripComment(raw));
+    if (line.empty()) continue;
+    const std::size_t n = cursor.LineNumber();
     if (!header) {
       if (line != kGnssCsvHeader)
-        throw IoError(where + "expected the header '" + std::string(kGnssCsvHeader) + "'");
+        detail::Fail(path, n, "expected the header '" + std::string(kGnssCsvHeader) + "'");
       header = true;
       continue;
     }
     double v[7];
     int count = 0;
-    std::size_t i = 0;
-    while (true) {
+    for (std::size_t i = 0;;) {
       const std::size_t comma = line.find(',', i);
-      const std::string field =
-          Trimmed(line.substr(i, comma == std::string::npos ? std::string::npos : comma - i));
+      const std::string_view field =
+          Trimmed(line.substr(i, comma == std::string_view::npos ? comma : comma - i));
       if (count == 7)
-        throw IoError(where + "more than 7 columns (" + std::string(kGnssCsvHeader) + ")");
-      double value = 0.0;
-      const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
-      if (field.empty() || ec != std::errc() || ptr != field.data() + field.size() ||
-          !std::isfinite(value))
-        throw IoError(where + "not a finite number '" + field + "'");
-      v[count++] = value;
-      if (comma == std::string::npos) break;
+        detail::Fail(path, n, "more than 7 columns (" + std::string(kGnssCsvHeader) + ")");
+      if (detail::ParseDouble(field, &v[count]) != detail::NumberStatus::kOk ||
+          !std::isfinite(v[count]))
+        detail::Fail(path, n, "not a finite number " + detail::Quote(field));
+      ++count;
+      if (comma == std::string_view::npos) break;
       i = comma + 1;
     }
     if (count != 7)
-      throw IoError(where + std::to_string(count) + " columns, expected 7 (" +
-                    std::string(kGnssCsvHeader) + ")");
-    if (std::abs(v[1]) > 90.0) throw IoError(where + "latitude out of [-90, 90]");
-    if (std::abs(v[2]) > 180.0) throw IoError(where + "longitude out of [-180, 180]");
-    if (!(v[4] > 0.0 && v[5] > 0.0 && v[6] > 0.0)) throw IoError(where + "a sigma is not > 0");
+      detail::Fail(
+          path, n,
+          std::to_string(count) + " columns, expected 7 (" + std::string(kGnssCsvHeader) + ")");
+    if (std::abs(v[1]) > 90.0) detail::Fail(path, n, "latitude out of [-90, 90]");
+    if (std::abs(v[2]) > 180.0) detail::Fail(path, n, "longitude out of [-180, 180]");
+    if (!(v[4] > 0.0 && v[5] > 0.0 && v[6] > 0.0)) detail::Fail(path, n, "a sigma is not > 0");
     if (!fixes.empty() && !(v[0] > fixes.back().timestamp))
-      throw IoError(where + "timestamp " + std::to_string(v[0]) +
-                    " is not after the previous one (line " + std::to_string(fixes.back().line) +
-                    ")");
+      detail::Fail(path, n,
+                   "timestamp " + std::to_string(v[0]) + " is not after the previous one (line " +
+                       std::to_string(fixes.back().line) + ")");
     GnssFix f;
     f.timestamp = v[0];
     f.latitude_deg = v[1];
     f.longitude_deg = v[2];
     f.altitude_m = v[3];
     f.sigma_enu_m = Eigen::Vector3d(v[4], v[5], v[6]);
-    f.line = line_number;
+    f.line = static_cast<int>(n);
     fixes.push_back(f);
-    if (end == text.size()) break;
   }
   if (!header)
-    throw IoError(path.string() + ": empty, expected the header '" + std::string(kGnssCsvHeader) +
-                  "'");
+    detail::Fail(path, 0, "empty, expected the header '" + std::string(kGnssCsvHeader) + "'");
   return fixes;
 }
 

@@ -8,6 +8,15 @@
 
 namespace rovermap::mapper {
 
+FrameGnss GnssOfFrame(const GraphOutcome& graph, std::size_t frame) {
+  if (frame >= graph.frame_fixes.size() || graph.frame_fixes[frame].empty())
+    return FrameGnss::kNone;
+  for (const std::size_t f : graph.frame_fixes[frame]) {
+    if (graph.solution.solved && graph.solution.fix_used[f]) return FrameGnss::kUsed;
+  }
+  return FrameGnss::kRejected;
+}
+
 std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult>& results,
                                                    io::SensorType sensor, const MapperOptions& o) {
   std::vector<graph::RelativeFactor> factors;

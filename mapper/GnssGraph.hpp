@@ -28,6 +28,11 @@ struct GraphOutcome {
   std::size_t frames_refused = 0;  ///< frames that could not be read again for the re-fusion
 };
 
+/// What became of frame `frame`'s GNSS fixes: kUsed if the solved graph used one of them,
+/// kRejected if it has fixes and none was used, kNone without a fix. Never throws.
+enum class FrameGnss { kNone, kUsed, kRejected };
+FrameGnss GnssOfFrame(const GraphOutcome& graph, std::size_t frame);
+
 /// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
 /// registration's covariance plus the per-step σ of the stereo rig's systematic error
 /// (mapper.stereo_systematic_*; a white-noise stand-in for an error the graph does not model

@@ -108,14 +108,12 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
     AppendComponents(s, solved
                             ? r.step.T_world_body.inverse() * graph->solution.T_world_body[r.index]
                             : Eigen::Isometry3d::Identity());
-    const char* gnss = "none";
-    if (graph != nullptr && r.index < graph->frame_fixes.size()) {
-      for (const std::size_t f : graph->frame_fixes[r.index]) {
-        gnss = solved && graph->solution.fix_used[f] ? "used" : "rejected";
-        if (std::string(gnss) == "used") break;
-      }
-    }
-    s << ',' << gnss << '\n';
+    const FrameGnss gnss = graph != nullptr ? GnssOfFrame(*graph, r.index) : FrameGnss::kNone;
+    s << ','
+      << (gnss == FrameGnss::kUsed       ? "used"
+          : gnss == FrameGnss::kRejected ? "rejected"
+                                         : "none")
+      << '\n';
   }
   return s.str();
 }
@@ -319,13 +317,11 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     // Where the GNSS fixes were: one tick per frame with a fix, at its distance.
     if (graph != nullptr && reg.distance_m.size() == results.size()) {
       const cv::Scalar used(60, 170, 60), rejected(200, 0, 200);
-      for (std::size_t k = 0; k < results.size() && k < graph->frame_fixes.size(); ++k) {
-        if (graph->frame_fixes[k].empty()) continue;
-        bool any_used = false;
-        for (const std::size_t f : graph->frame_fixes[k])
-          any_used = any_used || (graph_solved && graph->solution.fix_used[f]);
+      for (std::size_t k = 0; k < results.size(); ++k) {
+        const FrameGnss gnss = GnssOfFrame(*graph, k);
+        if (gnss == FrameGnss::kNone) continue;
         const cv::Point p = axes.Map(reg.distance_m[k], axes.y0);
-        cv::line(img, p, p - cv::Point(0, 10), any_used ? used : rejected, 2);
+        cv::line(img, p, p - cv::Point(0, 10), gnss == FrameGnss::kUsed ? used : rejected, 2);
       }
       legend.emplace_back("GNSS fix used (tick)", used);
       legend.emplace_back("GNSS fix rejected (tick)", rejected);

@@ -39,6 +39,21 @@ CommandResult RunRovermap(const fs::path& dir, const std::string& args) {
   return rovermap::testing::RunCapturing(std::string(ROVERMAP_EXECUTABLE) + " " + args, dir);
 }
 
+// A fix of `pose`'s body origin moved by `offset` [m, ENU], reporting σ `sigma_m` everywhere.
+rovermap::io::GnssFix FixOf(const rovermap::io::StampedPose& pose,
+                            const rovermap::io::Georeference& georef, const Eigen::Vector3d& offset,
+                            double sigma_m) {
+  const Eigen::Vector3d p = pose.T_world_body.translation() + offset;
+  const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
+  rovermap::io::GnssFix f;
+  f.timestamp = pose.timestamp;
+  f.latitude_deg = geo.x();
+  f.longitude_deg = geo.y();
+  f.altitude_m = geo.z();
+  f.sigma_enu_m = Eigen::Vector3d::Constant(sigma_m);
+  return f;
+}
+
 // One traverse for the suite: simulated once, replayed with and without the graph.
 class GnssGraph : public ::testing::Test {
  protected:
@@ -224,15 +239,8 @@ TEST_F(GnssInput, FixesThatAllDisagreeAreRejectedAndTheChainKept) {
   std::vector<rovermap::io::GnssFix> fixes;
   for (std::size_t k = 0; k < odometry.size(); ++k) {
     const double angle = 2.4 * static_cast<double>(k);
-    const Eigen::Vector3d p = odometry[k].T_world_body.translation() +
-                              800.0 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
-    const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
-    rovermap::io::GnssFix f;
-    f.timestamp = odometry[k].timestamp;
-    f.latitude_deg = geo.x();
-    f.longitude_deg = geo.y();
-    f.altitude_m = geo.z();
-    fixes.push_back(f);
+    fixes.push_back(FixOf(odometry[k], georef,
+                          800.0 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0), 1.0));
   }
   const fs::path seq = Sequence("outliers", "");
   rovermap::io::WriteGnssCsv(seq / "gnss.csv", fixes);
@@ -258,16 +266,8 @@ TEST_F(GnssInput, FixesThatAgreeAreUsedAndTheMapsFusedAgain) {
   const rovermap::io::Georeference georef(info.origin);
   std::vector<rovermap::io::GnssFix> fixes;
   for (std::size_t k = 0; k < truth.size(); ++k) {
-    const Eigen::Vector3d p = truth[k].T_world_body.translation() +
-                              0.02 * Eigen::Vector3d(std::sin(3.0 * k), std::cos(5.0 * k), 0.0);
-    const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
-    rovermap::io::GnssFix f;
-    f.timestamp = truth[k].timestamp;
-    f.latitude_deg = geo.x();
-    f.longitude_deg = geo.y();
-    f.altitude_m = geo.z();
-    f.sigma_enu_m = Eigen::Vector3d::Constant(0.02);
-    fixes.push_back(f);
+    fixes.push_back(FixOf(truth[k], georef,
+                          0.02 * Eigen::Vector3d(std::sin(3.0 * k), std::cos(5.0 * k), 0.0), 0.02));
   }
   const fs::path seq = Sequence("agree", "");
   rovermap::io::WriteGnssCsv(seq / "gnss.csv", fixes);
