@@ -75,6 +75,7 @@ struct ReplayArgs {
   std::string sequence;  ///< sequence directory (docs/design.md §4) or ROS 1 bag
   std::string out;       ///< output directory
   bool force = false;    ///< write into a non-empty directory
+  std::string reference_dem;  ///< a reference DEM to match the rover's DEM against ("" = none)
 };
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError; returns the exit status.

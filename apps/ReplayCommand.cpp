@@ -18,6 +18,7 @@
 #include "io/FileUtil.hpp"
 #include "io/FrameSource.hpp"
 #include "io/IoError.hpp"
+#include "io/ReferenceDem.hpp"
 #include "mapper/GnssGraph.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReadAhead.hpp"
@@ -107,6 +108,9 @@ CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
       ->required();
   cmd->add_option("--out", args->out, "Output directory (created)")->required();
   cmd->add_flag("--force", args->force, "Write into a non-empty DIR (its outputs are replaced)");
+  cmd->add_option("--reference-dem", args->reference_dem,
+                  "Reference DEM (any GeoTIFF GDAL reads, any CRS; band 2 its sigma) the rover's "
+                  "DEM is matched against for the pose graph; keys under reference.");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
       "Writes dem.tif, map.bt, trajectory.tum, odometry.tum, drift.csv, summary.json, dem.png,\n"
@@ -134,6 +138,39 @@ int RunReplay(const ReplayArgs& args) {
     throw config::ConfigError(e.what());
   }
 
+  // The reference DEM: unusable (unreadable, another body, not under the traverse) is reported
+  // and left out, unless reference.required.
+  std::unique_ptr<io::ReferenceDem> reference;
+  std::unique_ptr<mapper::ReferenceTrack> track;
+  std::string reference_unusable;
+  if (!args.reference_dem.empty()) {
+    try {
+      mapper::Validate(cfg.reference);
+    } catch (const std::invalid_argument& e) {
+      throw config::ConfigError(e.what());
+    }
+    try {
+      reference = std::make_unique<io::ReferenceDem>(
+          args.reference_dem, mapper->georeference(),
+          io::ReferenceDemOptions{cfg.reference.sigma_band, cfg.reference.sigma_m});
+      reference_unusable = mapper::CoverageProblem(*reference, source->odometry());
+      if (!reference_unusable.empty()) {
+        if (cfg.reference.required) throw io::IoError(reference_unusable);
+        reference.reset();
+      }
+    } catch (const io::IoError& e) {
+      if (cfg.reference.required) throw;
+      reference_unusable = e.what();
+      reference.reset();
+    }
+    if (reference) {
+      track = std::make_unique<mapper::ReferenceTrack>(*reference, cfg.reference, cfg.registration);
+    } else {
+      std::cerr << "replay: reference DEM left out (reference.required is false): "
+                << reference_unusable << "\n";
+    }
+  }
+
   Progress progress(source->frame_count());
   // Frame k+1 is read and prepared (stereo, index, outlier flags) while frame k is registered
   // and fused: on the 2-core machine that fills the cores the matcher leaves idle.
@@ -154,6 +191,21 @@ int RunReplay(const ReplayArgs& args) {
     const mapper::FrameResult r =
         mapper->ProcessPrepared(*item.frame, std::move(item.prepared), item.load_ms);
     progress.Frame(r, MsSince(start));
+    if (track) {
+      if (const std::optional<mapper::ReferenceMatch> m = track->AfterFrame(*mapper)) {
+        std::ostringstream line;
+        line << std::fixed << std::setprecision(2) << "replay: reference match, frames "
+             << m->first_frame << "-" << m->last_frame << ": ";
+        if (m->matched) {
+          line << "matched on frame " << m->frame << ", RMS " << std::setprecision(3)
+               << m->rms_before_m << " -> " << m->rms_after_m << " m, sigma x/y " << m->sigma_x_m
+               << "/" << m->sigma_y_m << " m, heading " << m->sigma_yaw_deg << " deg";
+        } else {
+          line << "refused: " << m->reason;
+        }
+        std::cerr << line.str() << "\n";
+      }
+    }
   }
   progress.Done();
 
@@ -161,16 +213,26 @@ int RunReplay(const ReplayArgs& args) {
   // are fused again from its poses (a second pass over the recording).
   std::optional<mapper::GraphOutcome> graph;
   try {
-    graph = mapper::SolveGnssGraph(mapper->results(), source->info().sensor_type, source->gnss(),
-                                   mapper->georeference(), cfg.graph, cfg.mapper);
+    graph = mapper::SolveGraph(mapper->results(), source->info().sensor_type, source->gnss(),
+                               track ? track->matches() : std::vector<mapper::ReferenceMatch>{},
+                               mapper->georeference(), cfg.graph, cfg.mapper);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
   }
-  if (graph) {
+  if (!args.reference_dem.empty() && !reference) {
+    // Reported in summary.json even without a graph.
+    if (!graph) graph.emplace();
+    graph->reference_unusable = reference_unusable;
+  }
+  if (graph && (graph->fixes > 0 || !graph->reference_matches.empty())) {
     const graph::PoseGraphResult& g = graph->solution;
+    std::size_t refused = 0;
+    for (const long f : graph->reference_factor) refused += f < 0 ? 1 : 0;
     std::cerr << "replay: pose graph: " << g.fixes_used << " of " << graph->fixes
               << " GNSS fixes used (" << g.fixes_rejected << " rejected, " << graph->unmatched
-              << " without a frame), " << std::fixed << std::setprecision(0) << g.solve_ms << " ms"
+              << " without a frame), " << g.poses_used << " of " << graph->reference_matches.size()
+              << " reference matches used (" << g.poses_rejected << " rejected, " << refused
+              << " refused), " << std::fixed << std::setprecision(0) << g.solve_ms << " ms"
               << (g.solved ? "" : "; kept the frame-to-frame trajectory: " + g.message) << "\n";
     if (g.solved) {
       graph->frames_refused = mapper::RefuseFrames(

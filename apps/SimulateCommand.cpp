@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "apps/Commands.hpp"
@@ -61,8 +62,13 @@ int RunSimulate(const SimulateArgs& args) {
       });
   // The true terrain, on the DEM's grid (dem.cell_size_m) and with dem.tif's conventions.
   const io::GeoTiffInfo tif = sim::WriteTerrainGeoTiff(out / "terrain.tif", *simulator, cfg.dem);
+  // An orbital product's stand-in, for replay --reference-dem (docs/graph.md).
+  std::optional<io::GeoTiffInfo> reference;
+  if (cfg.sim.reference_post_m > 0.0) {
+    reference = sim::WriteReferenceDem(out / "reference_dem.tif", *simulator);
+  }
   const double total_ms = core::MsSince(start);
-  const nlohmann::json summary = {
+  nlohmann::json summary = {
       {"out", args.out},
       {"frames", r.frames},
       {"sensor", cfg.sim.sensor == sim::SensorKind::kCloud ? "cloud" : "stereo"},
@@ -77,6 +83,10 @@ int RunSimulate(const SimulateArgs& args) {
       {"time_ms", total_ms},
       {"terrain_tif", (out / "terrain.tif").string()},
       {"terrain_tif_cells", tif.valid_cells}};
+  if (reference) {
+    summary["reference_dem_tif"] = (out / "reference_dem.tif").string();
+    summary["reference_dem_cells"] = reference->valid_cells;
+  }
   std::cout << summary.dump(2) << "\n";
   return kExitOk;
 }

@@ -272,6 +272,12 @@ const std::vector<KeyRule>& Rules() {
        [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_translation); }},
       {"bag.T_body_sensor_rpy_deg", "exactly 3 of them",
        [three_numbers](const Config& c) { return three_numbers(c.bag.T_body_sensor_rpy_deg); }},
+      {"sim.reference_offset_m", "exactly 2 of them",
+       [](const Config& c) -> Broken {
+         if (c.sim.reference_offset_m.size() == 2) return std::nullopt;
+         return "expected a list of 2 numbers (got " +
+                std::to_string(c.sim.reference_offset_m.size()) + ")";
+       }},
       {"graph.gnss_antenna_m", "exactly 3 of them",
        [three_numbers](const Config& c) { return three_numbers(c.graph.gnss_antenna_m); }},
       {"sim.terrain_cell_m", "sim.terrain_size_m / sim.terrain_cell_m < 20000",

@@ -13,6 +13,7 @@
 #include "eval/EvalOptions.hpp"
 #include "io/BagOptions.hpp"
 #include "mapper/GraphOptions.hpp"
+#include "mapper/ReferenceOptions.hpp"
 #include "mapper/MapperOptions.hpp"
 #include "mapper/ServeOptions.hpp"
 #include "mosaic/MosaicOptions.hpp"
@@ -48,6 +49,7 @@ struct Config {
   mapper::MapperOptions mapper;
   mapper::ServeOptions serve;
   mapper::GraphOptions graph;
+  mapper::ReferenceOptions reference;
   BagConfig bag;
   mosaic::MosaicOptions mosaic;
   campaign::CampaignOptions campaign;

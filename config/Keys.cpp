@@ -245,6 +245,13 @@ std::vector<KeyEntry> BuildRegistry() {
              Bounds{0, false, 1, false}, "fixes thrown gnss_outlier_m off (multipath)");
   sim.Double("gnss_outlier_m", &M::gnss_outlier_m, "m", AtLeast(0),
              "horizontal jump of a multipath fix");
+  sim.Double(
+      "reference_post_m", &M::reference_post_m, "m", AtLeast(0),
+      "write reference_dem.tif: the true terrain averaged over posts this far apart; 0 = none");
+  sim.Double("reference_sigma_m", &M::reference_sigma_m, "m", GreaterThan(0),
+             "reference DEM: height noise, and its sigma band");
+  sim.DoubleList("reference_offset_m", &M::reference_offset_m, "m", AnyValue(),
+                 "reference DEM: east, north (2 numbers) of its georeferencing error");
 
   using D = dem::ElevationMapOptions;
   SectionKeys<D> dem_keys(keys, "dem", &Config::dem);
@@ -395,8 +402,8 @@ std::vector<KeyEntry> BuildRegistry() {
   using G = mapper::GraphOptions;
   SectionKeys<G> gr(keys, "graph", &Config::graph);
   gr.Bool("enabled", &G::enabled,
-          "solve the pose graph when the recording has GNSS fixes (gnss.csv); false: frame to "
-          "frame only");
+          "solve the pose graph when the recording has GNSS fixes (gnss.csv) or a reference DEM "
+          "is given; false: frame to frame only");
   gr.Double("gnss_max_time_offset_s", &G::gnss_max_time_offset_s, "s", AtLeast(0),
             "a fix belongs to the nearest frame within this");
   gr.DoubleList("gnss_antenna_m", &G::gnss_antenna_m, "m", AnyValue(),
@@ -409,6 +416,34 @@ std::vector<KeyEntry> BuildRegistry() {
          "fewer fixes left after the gate: the frame-to-frame trajectory is kept");
   gr.Int("max_gate_rounds", &G::max_gate_rounds, "count", AtLeast(1),
          "solve-and-reject rounds at most");
+
+  using RF = mapper::ReferenceOptions;
+  SectionKeys<RF> rf(keys, "reference", &Config::reference);
+  rf.Double("every_m", &RF::every_m, "m", GreaterThan(0),
+            "replay --reference-dem: path between two matches of the rover's DEM");
+  rf.Double("window_m", &RF::window_m, "m", GreaterThan(0), "the recent path whose DEM is matched");
+  rf.Bool("sigma_band", &RF::sigma_band, "band 2 of the reference DEM holds its heights' sigma");
+  rf.Double("sigma_m", &RF::sigma_m, "m", GreaterThan(0),
+            "sigma of the reference's heights where no band gives it");
+  rf.Bool("vertical_trusted", &RF::vertical_trusted,
+          "the reference's vertical datum is the sequence's: a match also fixes the height");
+  rf.Bool("required", &RF::required,
+          "an unusable reference DEM stops the run (exit 1) instead of being left out");
+  rf.Double("search_m", &RF::search_m, "m", AtLeast(0),
+            "horizontal search about the last match's correction");
+  rf.Double("search_yaw_deg", &RF::search_yaw_deg, "deg", AtLeast(0), "heading search about it");
+  rf.Double("min_relief_ratio", &RF::min_relief_ratio, "ratio", AtLeast(1),
+            "x, y and heading need this x the information of the heights' noise alone");
+  rf.Double("ambiguity_ratio", &RF::ambiguity_ratio, "ratio", AtLeast(1),
+            "another placement fitting within this x the best one's RMS: refused as ambiguous");
+  rf.Double("max_sigma_m", &RF::max_sigma_m, "m", GreaterThan(0),
+            "a match with a larger sigma of x or y is refused");
+  rf.Double("max_sigma_deg", &RF::max_sigma_deg, "deg", GreaterThan(0),
+            "a match with a larger sigma of heading is refused");
+  rf.Double("covariance_scale", &RF::covariance_scale, "ratio", AtLeast(1),
+            "the match's covariance x this (neighbouring posts share errors)");
+  rf.Int("min_posts", &RF::min_posts, "count", AtLeast(10),
+         "fewer of the rover's posts over the reference: no match");
 
   using V = mapper::ServeOptions;
   SectionKeys<V> serve(keys, "serve", &Config::serve);

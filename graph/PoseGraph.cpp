@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -134,6 +135,69 @@ struct PositionCost {
   }
 };
 
+// Absolute pose of a node: [log(R·R_measᵀ); t − t_meas] in world axes, whitened by L (LᵀL is
+// the information, rows only for the directions it holds).
+struct AbsolutePoseCost {
+  Eigen::Quaterniond q_meas;
+  Eigen::Vector3d t_meas;
+  Matrix6d sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* q, const T* t, T* residual) const {
+    return Residual(q, t, T(0), residual);
+  }
+  // With the shared vertical offset (PoseFactor::z_offset).
+  template <typename T>
+  bool operator()(const T* q, const T* t, const T* offset, T* residual) const {
+    return Residual(q, t, offset[0], residual);
+  }
+  template <typename T>
+  bool Residual(const T* q, const T* t, const T& offset, T* residual) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Q(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Tt(t);
+    const Eigen::Quaternion<T> q_d = Q * q_meas.conjugate().cast<T>();
+    const T wxyz[4] = {q_d.w(), q_d.x(), q_d.y(), q_d.z()};
+    Eigen::Matrix<T, 6, 1> e;
+    ceres::QuaternionToAngleAxis(wxyz, e.data());
+    e.template tail<3>() = Tt - t_meas.cast<T>();
+    e(5) += offset;  // the reference reads `offset` higher: t_z − (t_meas_z − offset)
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
+    out = sqrt_information.cast<T>() * e;
+    return true;
+  }
+};
+
+// L with LᵀL = `information` (PSD), and its rank.
+Matrix6d SqrtOfInformation(const Matrix6d& information, int* rank) {
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(0.5 * (information + information.transpose()));
+  const double largest = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  Matrix6d L = Matrix6d::Zero();
+  *rank = 0;
+  for (int i = 0; i < 6; ++i) {
+    const double lambda = eig.eigenvalues()(i);
+    if (!(lambda > 1e-12 * largest)) continue;
+    L.row(i) = std::sqrt(lambda) * eig.eigenvectors().col(i).transpose();
+    ++*rank;
+  }
+  return L;
+}
+
+double PoseChi2(const PoseFactor& f, const Matrix6d& L, const Eigen::Isometry3d& T,
+                double z_offset) {
+  Eigen::Matrix<double, 6, 1> e;
+  const Eigen::AngleAxisd aa(T.linear() * f.T_world_body.linear().transpose());
+  e << aa.angle() * aa.axis(), T.translation() - f.T_world_body.translation();
+  if (f.z_offset) e(5) += z_offset;
+  return (L * e).squaredNorm();
+}
+
+// χ² at 99.9 % for 1..6 degrees of freedom; the gate of `dof` at the probability that
+// `gate_3` (a fix's gate) has for 3.
+double GateFor(int dof, double gate_3) {
+  constexpr double kChi2[6] = {10.83, 13.82, 16.27, 18.47, 20.52, 22.46};
+  return kChi2[std::clamp(dof, 1, 6) - 1] * gate_3 / kChi2[2];
+}
+
 double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
                const Eigen::Isometry3d& T) {
   return (sqrt_information * (T * f.lever_arm_body - f.position_world)).squaredNorm();
@@ -161,6 +225,14 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                const std::vector<RelativeFactor>& relative,
                                const std::vector<PositionFactor>& positions,
                                const PoseGraphOptions& options) {
+  return SolvePoseGraph(initial, relative, positions, {}, options);
+}
+
+PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
+                               const std::vector<RelativeFactor>& relative,
+                               const std::vector<PositionFactor>& positions,
+                               const std::vector<PoseFactor>& poses,
+                               const PoseGraphOptions& options) {
   Validate(options);
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n = initial.size();
@@ -182,13 +254,27 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       throw std::invalid_argument(what + ": position is not finite");
     CheckCovariance<3>(f.covariance, what);
   }
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const PoseFactor& f = poses[k];
+    const std::string what = "pose factor " + std::to_string(k);
+    if (f.node >= n)
+      throw std::invalid_argument(what + ": node " + std::to_string(f.node) + " of " +
+                                  std::to_string(n));
+    if (!f.T_world_body.matrix().allFinite())
+      throw std::invalid_argument(what + ": pose is not finite");
+    CheckCovariance<6>(f.information, what + " information");
+  }
 
   PoseGraphResult result;
   result.T_world_body = initial;
   result.fix_used.assign(positions.size(), false);
   result.fix_chi2.assign(positions.size(), 0.0);
-  if (positions.empty() || n == 0) {
-    result.message = "no position factor: the chained trajectory is kept";
+  result.pose_used.assign(poses.size(), false);
+  result.pose_chi2.assign(poses.size(), 0.0);
+  const bool any_gated =
+      std::any_of(poses.begin(), poses.end(), [](const PoseFactor& f) { return f.gated; });
+  if ((positions.empty() && !any_gated) || n == 0) {
+    result.message = "no absolute factor: the chained trajectory is kept";
     return result;
   }
 
@@ -201,11 +287,20 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   std::vector<Eigen::Matrix3d> fix_L(positions.size());
   for (std::size_t k = 0; k < positions.size(); ++k)
     fix_L[k] = SqrtInformation<3>(positions[k].covariance, Eigen::Vector3d::Constant(1e-12));
+  std::vector<Matrix6d> pose_L(poses.size());
+  std::vector<double> pose_gate(poses.size());
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    int rank = 0;
+    pose_L[k] = SqrtOfInformation(poses[k].information, &rank);
+    pose_gate[k] = GateFor(rank, options.fix_gate_chi2);
+  }
   Matrix6d prior_L = Matrix6d::Zero();
   prior_L.diagonal() << Eigen::Vector3d::Constant(1.0 / (options.first_pose_sigma_deg * kDegToRad)),
       Eigen::Vector3d::Constant(1.0 / options.first_pose_sigma_m);
 
   std::vector<bool> use(positions.size(), true);
+  std::vector<bool> use_pose(poses.size(), true);
+  double z_offset = 0.0;  // warm-started like the nodes
   std::vector<Node> nodes;
   for (int round = 0; round < options.max_gate_rounds; ++round) {
     // The first round starts from the chained trajectory, the others from the last solution
@@ -241,8 +336,25 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                nodes[f.node].t);
       ++used;
     }
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      if (!use_pose[k]) continue;
+      const PoseFactor& f = poses[k];
+      auto* cost = new AbsolutePoseCost{Eigen::Quaterniond(f.T_world_body.linear()).normalized(),
+                                        f.T_world_body.translation(), pose_L[k]};
+      ceres::LossFunction* loss =
+          f.gated ? new ceres::HuberLoss(options.fix_huber_sigmas) : nullptr;
+      if (f.z_offset) {
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<AbsolutePoseCost, 6, 4, 3, 1>(cost), loss,
+            nodes[f.node].q, nodes[f.node].t, &z_offset);
+      } else {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AbsolutePoseCost, 6, 4, 3>(cost),
+                                 loss, nodes[f.node].q, nodes[f.node].t);
+      }
+      if (f.gated) ++used;
+    }
     if (used < static_cast<std::size_t>(options.min_fixes)) {
-      result.message = std::to_string(used) + " position fix" + (used == 1 ? "" : "es") +
+      result.message = std::to_string(used) + " absolute factor" + (used == 1 ? "" : "s") +
                        " left after the gate, fewer than " + std::to_string(options.min_fixes) +
                        ": the chained trajectory is kept";
       result.T_world_body = initial;
@@ -281,15 +393,29 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     // final, so its fixes are the ones used.
     bool changed = false;
     const bool last_round = round + 1 == options.max_gate_rounds;
+    // Fixes and pose factors in one ranking, each χ² over its own gate.
     double worst = 0.0;
     for (std::size_t k = 0; k < positions.size(); ++k) {
       result.fix_chi2[k] = FixChi2(positions[k], fix_L[k], result.T_world_body[positions[k].node]);
-      if (use[k]) worst = std::max(worst, result.fix_chi2[k]);
+      if (use[k]) worst = std::max(worst, result.fix_chi2[k] / options.fix_gate_chi2);
+    }
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      result.pose_chi2[k] =
+          PoseChi2(poses[k], pose_L[k], result.T_world_body[poses[k].node], z_offset);
+      if (use_pose[k] && poses[k].gated)
+        worst = std::max(worst, result.pose_chi2[k] / pose_gate[k]);
     }
     for (std::size_t k = 0; k < positions.size(); ++k) {
-      if (!last_round && use[k] && result.fix_chi2[k] > options.fix_gate_chi2 &&
-          result.fix_chi2[k] >= 0.25 * worst) {
+      const double ratio = result.fix_chi2[k] / options.fix_gate_chi2;
+      if (!last_round && use[k] && ratio > 1.0 && ratio >= 0.25 * worst) {
         use[k] = false;
+        changed = true;
+      }
+    }
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const double ratio = result.pose_chi2[k] / pose_gate[k];
+      if (!last_round && poses[k].gated && use_pose[k] && ratio > 1.0 && ratio >= 0.25 * worst) {
+        use_pose[k] = false;
         changed = true;
       }
     }
@@ -301,6 +427,18 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     if (result.fix_used[k]) ++result.fixes_used;
   }
   result.fixes_rejected = positions.size() - result.fixes_used;
+  result.z_offset_m = result.solved ? z_offset : 0.0;
+  result.poses_used = 0;
+  result.poses_rejected = 0;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    result.pose_used[k] = result.solved && use_pose[k];
+    if (!poses[k].gated) continue;
+    if (result.pose_used[k]) {
+      ++result.poses_used;
+    } else {
+      ++result.poses_rejected;
+    }
+  }
   result.solve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

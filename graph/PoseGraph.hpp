@@ -63,6 +63,23 @@ struct PositionFactor {
   Eigen::Vector3d lever_arm_body = Eigen::Vector3d::Zero();
 };
 
+/// An absolute pose of node `node` (a match against a reference DEM): the residual
+/// [log(R·R_measᵀ); t − t_meas] (world axes; rad, m) weighed by `information`, positive
+/// semi-definite: zero in the directions the measurement does not hold (roll, pitch, often z).
+/// Robust and gated as the position fixes are.
+struct PoseFactor {
+  std::size_t node = 0;
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  Matrix6d information = Matrix6d::Zero();
+  /// false: a prior (least squares, never gated, not counted among the absolute factors), such
+  /// as the chain's own roll and pitch.
+  bool gated = true;
+  /// The measured z is on another vertical datum, `offset` above the nodes': the residual is
+  /// t_z − (t_meas_z − offset), one offset shared by every such factor and solved for
+  /// (PoseGraphResult::z_offset_m).
+  bool z_offset = false;
+};
+
 /// What SolvePoseGraph did.
 struct PoseGraphResult {
   /// The graph was solved: there was at least one position factor and Ceres returned a usable
@@ -74,6 +91,14 @@ struct PoseGraphResult {
   std::vector<double> fix_chi2;
   std::size_t fixes_used = 0;
   std::size_t fixes_rejected = 0;
+  /// The same per pose factor (a prior, PoseFactor::gated false, is always used).
+  std::vector<bool> pose_used;
+  std::vector<double> pose_chi2;
+  std::size_t poses_used = 0;
+  std::size_t poses_rejected = 0;
+  /// [m] how far above the nodes' vertical datum the PoseFactor::z_offset factors' is (0
+  /// without them).
+  double z_offset_m = 0.0;
   int solves = 0;      ///< gate rounds run
   int iterations = 0;  ///< Levenberg–Marquardt iterations, all solves
   double final_cost = 0.0;
@@ -82,12 +107,23 @@ struct PoseGraphResult {
 };
 
 /// Solves for every node's T_world_body from `initial` (one per node, the chained trajectory):
-/// relative factors as least squares in their covariance, position factors with a Huber loss,
-/// then rounds of gating (a fix over PoseGraphOptions::fix_gate_chi2 at the solution is left out
-/// and the rest solved again, until none is left out or the rounds end). With no position
-/// factor nothing is solved and the initial trajectory is returned as it is.
-/// @throw std::invalid_argument if a factor names a node that does not exist, a covariance is
-///        not finite or not symmetric positive semi-definite, or the options are invalid.
+/// relative factors as least squares in their covariance, position and pose factors (the
+/// absolute ones) with a Huber loss, then rounds of gating (an absolute factor over the gate at
+/// the solution is left out and the rest solved again, until none is left out or the rounds
+/// end). The gate is PoseGraphOptions::fix_gate_chi2 for a fix's 3 degrees of freedom and the
+/// χ² at the same probability for a pose factor's (the rank of its information). Fewer than
+/// PoseGraphOptions::min_fixes absolute factors left, or none given: nothing is solved and the
+/// initial trajectory is returned as it is.
+/// @throw std::invalid_argument if a factor names a node that does not exist, a covariance or
+///        information is not finite or not symmetric positive semi-definite, or the options are
+///        invalid.
+PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
+                               const std::vector<RelativeFactor>& relative,
+                               const std::vector<PositionFactor>& positions,
+                               const std::vector<PoseFactor>& poses,
+                               const PoseGraphOptions& options = {});
+
+/// The same without pose factors.
 PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                const std::vector<RelativeFactor>& relative,
                                const std::vector<PositionFactor>& positions,

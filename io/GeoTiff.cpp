@@ -195,6 +195,7 @@ DemRaster ReadDemGeoTiff(const std::filesystem::path& path) {
     Fail(path, "rotated or degenerate grids are not supported");
   }
   if (const char* wkt = ds->GetProjectionRef(); wkt != nullptr) raster.wkt = wkt;
+  if (const char* datum = ds->GetMetadataItem("ELEVATION_DATUM")) raster.elevation_datum = datum;
   if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs != nullptr) {
     const char* code = srs->GetAuthorityCode(nullptr);
     const char* name = srs->GetAuthorityName(nullptr);

@@ -89,6 +89,9 @@ struct DemRaster {
   /// GDAL order: x = g[0] + col·g[1], y = g[3] + row·g[5] at a cell's corner; g[2] = g[4] = 0.
   std::array<double, 6> geotransform{};
   std::string wkt;                             ///< the CRS as WKT, empty when the file has none
+  /// ELEVATION_DATUM metadata as written (rovermap's DEMs: "height above the origin altitude
+  /// A m ..."), empty when absent.
+  std::string elevation_datum;
   int epsg = 0;                                ///< when the CRS has an EPSG code, else 0
   std::vector<float> elevation_m;              ///< band 1, NaN = no data
   std::vector<float> stddev_m;                 ///< band 2 (empty if the file has one band)

@@ -5,6 +5,7 @@
 
 #include "io/IoError.hpp"
 #include "mapper/FrameJudge.hpp"
+#include "mapper/PoseUncertainty.hpp"
 
 namespace rovermap::mapper {
 
@@ -48,25 +49,42 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
   return factors;
 }
 
-std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& results,
-                                           io::SensorType sensor,
-                                           const std::vector<io::GnssFix>& fixes,
-                                           const io::Georeference& georeference,
-                                           const GraphOptions& options,
-                                           const MapperOptions& mapper_options) {
-  // A fix or two (a bag's origin fix) are no track to hold the trajectory to.
-  if (!options.enabled || results.empty() ||
-      fixes.size() < static_cast<std::size_t>(std::max(options.min_gnss_fixes, 1))) {
+std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
+                                       io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
+                                       const std::vector<ReferenceMatch>& matches,
+                                       const io::Georeference& georeference,
+                                       const GraphOptions& options,
+                                       const MapperOptions& mapper_options) {
+  // A fix or two (a bag's origin fix) are no track to hold the trajectory to; one reference
+  // match is (it holds heading as well as position).
+  const bool enough_fixes =
+      fixes.size() >= static_cast<std::size_t>(std::max(options.min_gnss_fixes, 1));
+  if (!options.enabled || results.empty() || (!enough_fixes && matches.empty())) {
     return std::nullopt;
+  }
+  std::vector<graph::PoseFactor> poses;
+  GraphOutcome out;
+  out.reference_matches = matches;
+  for (const ReferenceMatch& m : matches) {
+    if (!m.matched || m.frame >= results.size()) {
+      out.reference_factor.push_back(-1);
+      continue;
+    }
+    out.reference_factor.push_back(static_cast<long>(poses.size()));
+    graph::PoseFactor f;
+    f.node = m.frame;
+    f.T_world_body = m.T_world_body;
+    f.information = m.information;
+    f.z_offset = !m.vertical_absolute;
+    poses.push_back(f);
   }
   graph::PoseGraphOptions solver;
   solver.fix_gate_chi2 = options.fix_gate_chi2;
   solver.fix_huber_sigmas = options.fix_huber_sigmas;
   solver.max_gate_rounds = options.max_gate_rounds;
-  solver.min_fixes = options.min_gnss_fixes;
+  solver.min_fixes = poses.empty() ? options.min_gnss_fixes : 1;
   graph::Validate(solver);
 
-  GraphOutcome out;
   out.fixes = fixes.size();
   out.frame_fixes.resize(results.size());
   const Eigen::Vector3d antenna(options.gnss_antenna_m.at(0), options.gnss_antenna_m.at(1),
@@ -103,9 +121,57 @@ std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& resul
   std::vector<Eigen::Isometry3d> initial;
   initial.reserve(results.size());
   for (const FrameResult& r : results) initial.push_back(r.step.T_world_body);
-  out.solution = graph::SolvePoseGraph(initial, RelativeFactors(results, sensor, mapper_options),
-                                       positions, solver);
+  // The chain's own roll and pitch, with its σ, as priors: fixes and reference matches hold
+  // position and heading, not the tilt, and without them the graph bought a shorter
+  // horizontal path (a drifting scale) with a tilted one (10° over a 300 m loop, z metres off).
+  for (std::size_t k = 1; k < results.size(); ++k) {
+    const PoseSigmas sd = SigmasOf(results[k].step);
+    const double sigma = std::max({sd.roll_deg, sd.pitch_deg, 0.01}) * M_PI / 180.0;
+    graph::PoseFactor prior;
+    prior.node = k;
+    prior.T_world_body = results[k].step.T_world_body;
+    prior.information(0, 0) = prior.information(1, 1) = 1.0 / (sigma * sigma);
+    prior.gated = false;
+    poses.push_back(prior);
+  }
+  out.solution = graph::SolvePoseGraph(
+      initial, RelativeFactors(results, sensor, mapper_options),
+      enough_fixes ? positions : std::vector<graph::PositionFactor>{}, poses, solver);
+  if (!enough_fixes) {  // too few to weigh: left out, not rejected
+    for (std::vector<std::size_t>& f : out.frame_fixes) f.clear();
+  }
   return out;
+}
+
+FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame) {
+  FrameReference out = FrameReference::kNone;
+  for (std::size_t k = 0; k < graph.reference_matches.size(); ++k) {
+    if (graph.reference_matches[k].frame != frame) continue;
+    const long factor = k < graph.reference_factor.size() ? graph.reference_factor[k] : -1;
+    if (factor < 0) {
+      if (out == FrameReference::kNone) out = FrameReference::kRefused;
+      continue;
+    }
+    const auto f = static_cast<std::size_t>(factor);
+    if (f < graph.solution.pose_used.size() && graph.solution.pose_used[f])
+      return FrameReference::kUsed;
+    out = FrameReference::kRejected;
+  }
+  return out;
+}
+
+const char* ToString(FrameReference outcome) {
+  switch (outcome) {
+    case FrameReference::kUsed:
+      return "used";
+    case FrameReference::kRejected:
+      return "rejected";
+    case FrameReference::kRefused:
+      return "refused";
+    case FrameReference::kNone:
+      return "none";
+  }
+  return "none";
 }
 
 std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,

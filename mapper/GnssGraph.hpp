@@ -15,6 +15,7 @@
 #include "io/Gnss.hpp"
 #include "mapper/GraphOptions.hpp"
 #include "mapper/Mapper.hpp"
+#include "mapper/ReferenceMatch.hpp"
 
 namespace rovermap::mapper {
 
@@ -26,12 +27,25 @@ struct GraphOutcome {
   /// Per frame: its fixes' indices into solution.fix_used (empty: none).
   std::vector<std::vector<std::size_t>> frame_fixes;
   std::size_t frames_refused = 0;  ///< frames that could not be read again for the re-fusion
+  /// Every match against the reference DEM, refused ones too (ReferenceTrack), in order.
+  std::vector<ReferenceMatch> reference_matches;
+  /// Per entry of reference_matches: its index into solution.pose_used, or −1 if refused.
+  std::vector<long> reference_factor;
+  /// A reference DEM was given but could not be used at all: why (else empty).
+  std::string reference_unusable;
 };
 
 /// What became of frame `frame`'s GNSS fixes: kUsed if the solved graph used one of them,
 /// kRejected if it has fixes and none was used, kNone without a fix. Never throws.
 enum class FrameGnss { kNone, kUsed, kRejected };
 FrameGnss GnssOfFrame(const GraphOutcome& graph, std::size_t frame);
+
+/// What became of a reference match held by frame `frame`: kUsed by the solved graph,
+/// kRejected by its gate (or the graph was not solved), kRefused by the match's own checks,
+/// kNone when no match is on this frame. Never throws.
+enum class FrameReference { kNone, kUsed, kRejected, kRefused };
+FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame);
+const char* ToString(FrameReference outcome);
 
 /// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
 /// registration's covariance plus the per-step σ of the stereo rig's systematic error
@@ -43,15 +57,17 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
                                                    const MapperOptions& options);
 
 /// Solves the graph of `results` with `fixes` (geodetic, placed in the world frame by
-/// `georeference`). nullopt when the graph is off or there are fewer fixes than
-/// GraphOptions::min_gnss_fixes (a bag's single origin fix is no track).
+/// `georeference`) and the accepted `matches` against a reference DEM (pose factors; the
+/// refused ones are kept in the outcome for the report). nullopt when the graph is off, or
+/// there are fewer fixes than GraphOptions::min_gnss_fixes (a bag's single origin fix is no
+/// track) and no match at all. A reference match holds position and heading: one is enough.
 /// @throw std::invalid_argument if the options are invalid.
-std::optional<GraphOutcome> SolveGnssGraph(const std::vector<FrameResult>& results,
-                                           io::SensorType sensor,
-                                           const std::vector<io::GnssFix>& fixes,
-                                           const io::Georeference& georeference,
-                                           const GraphOptions& options,
-                                           const MapperOptions& mapper_options);
+std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
+                                       io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
+                                       const std::vector<ReferenceMatch>& matches,
+                                       const io::Georeference& georeference,
+                                       const GraphOptions& options,
+                                       const MapperOptions& mapper_options);
 
 /// Empties `mapper`'s DEM and OctoMap and fuses every frame it fused before again, read anew
 /// from `source` (random access), at `T_world_body` (one per result) with the chain's

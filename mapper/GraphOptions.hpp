@@ -6,8 +6,8 @@
 namespace rovermap::mapper {
 
 struct GraphOptions {
-  /// Solve the graph when the recording has absolute fixes (gnss.csv beside a sequence); false:
-  /// the frame-to-frame trajectory is the result, fixes or not.
+  /// Solve the graph when the recording has absolute fixes (gnss.csv beside a sequence) or a
+  /// reference DEM is given; false: the frame-to-frame trajectory is the result, fixes or not.
   bool enabled = true;
   /// [s] a fix belongs to the frame whose timestamp is nearest, if within this; >= 0.
   double gnss_max_time_offset_s = 0.05;

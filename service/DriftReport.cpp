@@ -88,7 +88,8 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
        "status,fallback_reason,odometry_directions,iterations,inliers,inlier_ratio,rms_m,time_ms,"
        "matcher_status,conditioning,points,outliers_removed,detail,"
        "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,image_check,"
-       "graph_dx_m,graph_dy_m,graph_dz_m,graph_droll_deg,graph_dpitch_deg,graph_dyaw_deg,gnss\n";
+       "graph_dx_m,graph_dy_m,graph_dz_m,graph_droll_deg,graph_dpitch_deg,graph_dyaw_deg,gnss,"
+       "reference\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
     s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
@@ -113,6 +114,8 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
       << (gnss == FrameGnss::kUsed       ? "used"
           : gnss == FrameGnss::kRejected ? "rejected"
                                          : "none")
+      << ','
+      << ToString(graph != nullptr ? ReferenceOfFrame(*graph, r.index) : FrameReference::kNone)
       << '\n';
   }
   return s.str();
@@ -211,7 +214,39 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
 
 nlohmann::json GraphJson(const GraphOutcome& graph) {
   const graph::PoseGraphResult& s = graph.solution;
+  nlohmann::json matches = nlohmann::json::array();
+  std::size_t refused = 0;
+  for (std::size_t k = 0; k < graph.reference_matches.size(); ++k) {
+    const ReferenceMatch& m = graph.reference_matches[k];
+    const long f = k < graph.reference_factor.size() ? graph.reference_factor[k] : -1;
+    const bool used = f >= 0 && static_cast<std::size_t>(f) < s.pose_used.size() &&
+                      s.pose_used[static_cast<std::size_t>(f)];
+    refused += f < 0 ? 1 : 0;
+    matches.push_back({{"frame", m.frame},
+                       {"first_frame", m.first_frame},
+                       {"last_frame", m.last_frame},
+                       {"status", f < 0  ? "refused"
+                                  : used ? "used"
+                                         : "rejected"},
+                       {"reason", m.reason},
+                       {"posts", m.posts},
+                       {"rms_before_m", Number(m.rms_before_m)},
+                       {"rms_after_m", Number(m.rms_after_m)},
+                       {"sigma_x_m", Number(m.sigma_x_m)},
+                       {"sigma_y_m", Number(m.sigma_y_m)},
+                       {"sigma_yaw_deg", Number(m.sigma_yaw_deg)},
+                       {"relief_ratio", Number(m.relief_ratio)},
+                       {"starts", m.starts},
+                       {"ms", m.ms}});
+  }
   return {{"solved", s.solved},
+          {"reference_matches", graph.reference_matches.size()},
+          {"reference_used", s.poses_used},
+          {"reference_rejected", s.poses_rejected},
+          {"reference_refused", refused},
+          {"reference_unusable", graph.reference_unusable},
+          {"reference_vertical_offset_m", s.z_offset_m},
+          {"reference", matches},
           {"gnss_fixes", graph.fixes},
           {"gnss_unmatched", graph.unmatched},
           {"gnss_used", s.fixes_used},
@@ -287,8 +322,10 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     const bool with_sigma = chain_sigma && reg.distance_m.size() == two_sigma.size();
     const bool chained_ok =
         graph_solved && chained && chained->registered.status == eval::MetricStatus::kOk;
-    const std::size_t legend_lines =
-        2 + (with_sigma ? 1 : 0) + (chained_ok ? 1 : 0) + (graph != nullptr ? 2 : 0);
+    const bool gnss_ticks = graph != nullptr && graph->fixes > 0;
+    const bool reference_ticks = graph != nullptr && !graph->reference_matches.empty();
+    const std::size_t legend_lines = 2 + (with_sigma ? 1 : 0) + (chained_ok ? 1 : 0) +
+                                     (gnss_ticks ? 2 : 0) + (reference_ticks ? 2 : 0);
     const double y1 = std::max({peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m),
                                 with_sigma ? peak(two_sigma) : 0.0,
                                 chained_ok ? peak(chained->registered.ate_origin_error_m) : 0.0}) *
@@ -315,7 +352,7 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     }
     if (with_sigma) legend.emplace_back(sigma_label, sigma_colour);
     // Where the GNSS fixes were: one tick per frame with a fix, at its distance.
-    if (graph != nullptr && reg.distance_m.size() == results.size()) {
+    if (gnss_ticks && reg.distance_m.size() == results.size()) {
       const cv::Scalar used(60, 170, 60), rejected(200, 0, 200);
       for (std::size_t k = 0; k < results.size(); ++k) {
         const FrameGnss gnss = GnssOfFrame(*graph, k);
@@ -325,6 +362,18 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
       }
       legend.emplace_back("GNSS fix used (tick)", used);
       legend.emplace_back("GNSS fix rejected (tick)", rejected);
+    }
+    // Where the reference DEM was matched: a taller tick on the frame the match holds.
+    if (reference_ticks && reg.distance_m.size() == results.size()) {
+      const cv::Scalar used(200, 120, 0), refused(0, 140, 255);
+      for (std::size_t k = 0; k < results.size(); ++k) {
+        const FrameReference ref = ReferenceOfFrame(*graph, k);
+        if (ref == FrameReference::kNone) continue;
+        const cv::Point p = axes.Map(reg.distance_m[k], axes.y0);
+        cv::line(img, p, p - cv::Point(0, 20), ref == FrameReference::kUsed ? used : refused, 2);
+      }
+      legend.emplace_back("reference DEM match used (tall tick)", used);
+      legend.emplace_back("reference DEM match refused or rejected (tall tick)", refused);
     }
   } else {
     std::vector<double> distance, correction;

@@ -1,6 +1,8 @@
 #pragma once
 // Options of the sequence simulator behind `rovermap simulate` (config keys under `sim.`).
 
+#include <vector>
+
 namespace rovermap::sim {
 
 enum class PathShape { kStraight, kCurves, kLoop };
@@ -82,10 +84,18 @@ struct SimOptions {
   // fraction of fixes thrown `gnss_outlier_m` off in a random horizontal direction (multipath),
   // still reporting the nominal σ.
   int gnss_every_frames = 0;
-  double gnss_sigma_m = 0.5;      ///< [m] horizontal σ, east and north
-  double gnss_sigma_up_m = 1.0;   ///< [m] vertical σ
+  double gnss_sigma_m = 0.5;     ///< [m] horizontal σ, east and north
+  double gnss_sigma_up_m = 1.0;  ///< [m] vertical σ
   double gnss_outlier_fraction = 0.0;
-  double gnss_outlier_m = 10.0;   ///< [m]
+  double gnss_outlier_m = 10.0;  ///< [m]
+
+  // A reference DEM (reference_dem.tif beside the sequence, docs/graph.md), as an orbital
+  // product has it: the true terrain averaged over posts of `reference_post_m` (0 = none), with
+  // Gaussian noise of `reference_sigma_m` (band 2 says so), misplaced by `reference_offset_m`
+  // (east, north) in its georeferencing.
+  double reference_post_m = 0.0;                        ///< [m]
+  double reference_sigma_m = 0.2;                       ///< [m]
+  std::vector<double> reference_offset_m = {0.5, 0.0};  ///< [m] east, north
 };
 
 }  // namespace rovermap::sim

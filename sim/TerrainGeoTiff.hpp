@@ -19,4 +19,13 @@ namespace rovermap::sim {
 io::GeoTiffInfo WriteTerrainGeoTiff(const std::filesystem::path& path, const Simulator& simulator,
                                     dem::ElevationMapOptions grid);
 
+/// reference_dem.tif (SimOptions::reference_*): the true terrain averaged over square posts of
+/// reference_post_m (a 5 × 5 sample each), plus Gaussian noise of reference_sigma_m, north-up in
+/// the sequence's projected CRS, with its geotransform moved by reference_offset_m (east, north):
+/// an orbital product's georeferencing error. Band 2 holds reference_sigma_m. Posts beyond the
+/// terrain square are no data. Written atomically.
+/// @throw io::IoError naming `path` if it cannot be written; std::invalid_argument if
+///        reference_post_m is not > 0.
+io::GeoTiffInfo WriteReferenceDem(const std::filesystem::path& path, const Simulator& simulator);
+
 }  // namespace rovermap::sim

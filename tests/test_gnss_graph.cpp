@@ -28,16 +28,12 @@
 namespace fs = std::filesystem;
 using rovermap::testing::CommandResult;
 using rovermap::testing::ReadCsv;
+using rovermap::testing::RunRovermapIn;
 using rovermap::testing::Slurp;
 
 namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";
-
-// `rovermap ARGS` with stdout and stderr into `dir`.
-CommandResult RunRovermap(const fs::path& dir, const std::string& args) {
-  return rovermap::testing::RunCapturing(std::string(ROVERMAP_EXECUTABLE) + " " + args, dir);
-}
 
 // A fix of `pose`'s body origin moved by `offset` [m, ENU], reporting σ `sigma_m` everywhere.
 rovermap::io::GnssFix FixOf(const rovermap::io::StampedPose& pose,
@@ -67,7 +63,7 @@ class GnssGraph : public ::testing::Test {
     if (rovermap::testing::kSanitizedBuild) return;
     // 2 m a frame at 1 Hz around a 40 m loop.
     const int frames = 150;
-    const CommandResult sim = RunRovermap(
+    const CommandResult sim = RunRovermapIn(
         *dir_, "simulate --out " + (*dir_ / "seq").string() +
                    " --set sim.sensor=cloud --set sim.frames=" + std::to_string(frames) +
                    " --set sim.frame_rate_hz=1 --set sim.speed_m_s=2 --set sim.terrain_size_m=400"
@@ -79,13 +75,13 @@ class GnssGraph : public ::testing::Test {
     // 20 cm cells: the DEM checks the graph's poses, not its detail, and a quarter of the
     // default's cells along each edge keeps the suite quick.
     const std::string dem = " --set dem.cell_size_m=0.2";
-    const CommandResult with = RunRovermap(
+    const CommandResult with = RunRovermapIn(
         *dir_, "replay " + (*dir_ / "seq").string() + " --out " + (*dir_ / "graph").string() + dem);
     ASSERT_EQ(with.status, 0) << with.err;
     *err_ = with.err;
     const CommandResult without =
-        RunRovermap(*dir_, "replay " + (*dir_ / "seq").string() + " --out " +
-                               (*dir_ / "f2f").string() + " --set graph.enabled=false" + dem);
+        RunRovermapIn(*dir_, "replay " + (*dir_ / "seq").string() + " --out " +
+                                 (*dir_ / "f2f").string() + " --set graph.enabled=false" + dem);
     ASSERT_EQ(without.status, 0) << without.err;
   }
   static void TearDownTestSuite() {

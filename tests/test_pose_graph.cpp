@@ -246,3 +246,72 @@ TEST(PoseGraph, BadFactorsAndOptionsAreRefusedNamingThem) {
     EXPECT_NE(std::string(e.what()).find("graph.fix_gate_chi2"), std::string::npos) << e.what();
   }
 }
+
+namespace {
+
+// Pose factors as a reference-DEM match gives them: heading, x, y and z of `every`-th node,
+// z on another vertical datum `datum_m` above the truth's.
+std::vector<graph::PoseFactor> Matches(const Traverse& t, int every, double datum_m) {
+  std::vector<graph::PoseFactor> out;
+  for (std::size_t k = every; k < t.truth.size(); k += every) {
+    graph::PoseFactor f;
+    f.node = k;
+    f.T_world_body = t.truth[k];
+    f.T_world_body.translation().z() += datum_m;
+    f.information(2, 2) = 1.0 / std::pow(0.2 * M_PI / 180.0, 2);
+    f.information(3, 3) = f.information(4, 4) = 1.0 / (0.1 * 0.1);
+    f.information(5, 5) = 1.0 / (0.05 * 0.05);
+    f.z_offset = true;
+    out.push_back(f);
+  }
+  return out;
+}
+
+}  // namespace
+
+// A match holds heading, x, y and a height on the reference's own vertical datum: the graph
+// holds the chain to them and finds the datum's offset, the same for every match.
+TEST(PoseGraph, PoseFactorsHoldPositionHeadingAndFindTheirVerticalOffset) {
+  const Traverse t = MakeTraverse();
+  const double chained_error = MaxPositionError(t.chained, t.truth);
+  ASSERT_GT(chained_error, 3.0);
+  const graph::PoseGraphResult r =
+      graph::SolvePoseGraph(t.chained, t.relative, {}, Matches(t, 40, 7.0));
+  ASSERT_TRUE(r.solved) << r.message;
+  EXPECT_EQ(r.poses_used, 5u);
+  EXPECT_EQ(r.poses_rejected, 0u);
+  // Heights: the offset and the trajectory's level are one freedom (frame 0's weak prior holds
+  // it), so every node's height error is 7 m less the offset found.
+  for (std::size_t k = 40; k < t.truth.size(); k += 40) {
+    const double dz = r.T_world_body[k].translation().z() - t.truth[k].translation().z();
+    EXPECT_NEAR(dz, 7.0 - r.z_offset_m, 0.15) << k;
+  }
+  EXPECT_LT(std::abs(r.z_offset_m - 7.0), 1.0);
+  Eigen::Vector2d horizontal_worst(0, 0);
+  for (std::size_t k = 0; k < t.truth.size(); ++k) {
+    const Eigen::Vector2d d =
+        (r.T_world_body[k].translation() - t.truth[k].translation()).head<2>().cwiseAbs();
+    horizontal_worst = horizontal_worst.cwiseMax(d);
+  }
+  EXPECT_LT(horizontal_worst.norm(), 0.15 * chained_error) << horizontal_worst.transpose();
+  EXPECT_LT(std::abs(HeadingErrorDeg(r.T_world_body[160], t.truth[160])), 0.6);
+}
+
+TEST(PoseGraph, AWrongMatchIsRejectedAndPriorsAreNeitherGatedNorCounted) {
+  const Traverse t = MakeTraverse();
+  std::vector<graph::PoseFactor> poses = Matches(t, 40, 0.0);
+  poses[2].T_world_body.translation().x() += 5.0;  // 50σ: a match on the wrong crater
+  const graph::PoseGraphResult r = graph::SolvePoseGraph(t.chained, t.relative, {}, poses);
+  ASSERT_TRUE(r.solved) << r.message;
+  EXPECT_EQ(r.poses_rejected, 1u);
+  EXPECT_FALSE(r.pose_used[2]);
+  // A prior alone (the chain's own tilt) is no absolute factor: nothing is solved.
+  graph::PoseFactor prior;
+  prior.node = 10;
+  prior.T_world_body = t.chained[10];
+  prior.information(0, 0) = prior.information(1, 1) = 1e4;
+  prior.gated = false;
+  const graph::PoseGraphResult alone = graph::SolvePoseGraph(t.chained, t.relative, {}, {prior});
+  EXPECT_FALSE(alone.solved);
+  EXPECT_EQ(alone.poses_used + alone.poses_rejected, 0u);
+}

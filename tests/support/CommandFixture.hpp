@@ -49,6 +49,11 @@ inline CommandResult RunCapturing(const std::string& cmd, const std::filesystem:
   return r;
 }
 
+/// `rovermap ARGS` with stdout and stderr into `dir` (suites that share one scratch directory).
+inline CommandResult RunRovermapIn(const std::filesystem::path& dir, const std::string& args) {
+  return RunCapturing(std::string(ROVERMAP_EXECUTABLE) + " " + args, dir);
+}
+
 class CommandFixture : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = ScratchDir(); }

@@ -1,0 +1,99 @@
+#pragma once
+// Matches of the rover's recent DEM against a reference DEM (docs/graph.md): every
+// ReferenceOptions::every_m metres the cells first seen along the last window_m metres are
+// averaged at the reference's posts and registered onto it with the project's matcher
+// (point-to-plane, weighted by both DEMs' σ), from several starts over the search region. A
+// match that is ill-conditioned or ambiguous is refused and says why; a good one becomes an
+// absolute factor on x, y, heading and height (the height up to the reference's vertical
+// datum, unless trusted) of the frame nearest the patch's centre.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dem/ElevationMap.hpp"
+#include "io/ReferenceDem.hpp"
+#include "io/Tum.hpp"
+#include "mapper/ReferenceOptions.hpp"
+#include "registration/Options.hpp"
+
+namespace rovermap::mapper {
+
+class Mapper;
+
+/// One match of the rover's DEM against the reference.
+struct ReferenceMatch {
+  std::size_t frame = 0;        ///< the frame the factor holds (nearest the patch's centre)
+  std::size_t first_frame = 0;  ///< the window: the frames whose new cells were matched
+  std::size_t last_frame = 0;
+  bool matched = false;  ///< a factor for the graph; false: refused, `reason` says why
+  std::string reason;
+  std::size_t posts = 0;  ///< rover posts (cells averaged at the reference's posts) matched
+  /// [m] RMS height difference over the posts at the seed and at the match (each after the
+  /// median height difference is removed).
+  double rms_before_m = 0.0;
+  double rms_after_m = 0.0;
+  /// World to world: the patch placed on the reference (applied to the chained poses).
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  /// The measured pose of `frame`: its chained pose turned by the correction's heading and
+  /// moved by the correction (roll and pitch kept).
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  /// z is on the sequence's vertical datum (ReferenceOptions::vertical_trusted); false: on the
+  /// reference's, an unknown offset away that the graph estimates (one for all matches).
+  bool vertical_absolute = false;
+  /// Information of T_world_body for the residual [log(R R_measᵀ); t − t_meas] (world axes,
+  /// rad and m): heading, x, y and z at the patch's centre (zero in roll and pitch there),
+  /// moved to the frame's position (the lever gives roll and pitch a little).
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  double sigma_x_m = 0.0;  ///< 1σ of the match (after covariance_scale), at the patch's centre
+  double sigma_y_m = 0.0;
+  double sigma_yaw_deg = 0.0;
+  /// Smallest ratio, over x, y and heading, of the match's information to what the heights'
+  /// noise alone gives (ReferenceOptions::min_relief_ratio).
+  double relief_ratio = 0.0;
+  int starts = 0;  ///< matcher runs (the search's starts)
+  double ms = 0.0;
+};
+
+/// One match: the published cells of `map` first seen in frames [first_frame, last_frame],
+/// registered onto `reference` from starts about `seed` (a world-to-world correction).
+/// `poses` are the window's frames' chained T_world_body, first_frame first. Never throws on
+/// data: a refused match says why.
+ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceDem& reference,
+                              std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
+                              const Eigen::Isometry3d& seed, const ReferenceOptions& options,
+                              const registration::RegistrationOptions& registration);
+
+/// When to match during a replay: after each frame, AfterFrame matches once the path since the
+/// last match reaches every_m, the window being the frames of the last window_m metres; each
+/// match is seeded with the last accepted one's correction.
+class ReferenceTrack {
+ public:
+  ReferenceTrack(const io::ReferenceDem& reference, const ReferenceOptions& options,
+                 const registration::RegistrationOptions& registration);
+  /// @return the match made after the mapper's last frame, if one was due.
+  std::optional<ReferenceMatch> AfterFrame(const Mapper& mapper);
+  const std::vector<ReferenceMatch>& matches() const { return matches_; }
+
+ private:
+  const io::ReferenceDem& reference_;
+  ReferenceOptions options_;
+  registration::RegistrationOptions registration_;
+  std::vector<double> path_m_;  // path length at each frame
+  double last_match_m_ = 0.0;
+  Eigen::Isometry3d seed_ = Eigen::Isometry3d::Identity();
+  std::vector<ReferenceMatch> matches_;
+};
+
+/// Why `reference` cannot serve a traverse along `odometry` ("" when it can): its footprint
+/// misses the traverse's box (dead reckoning's positions, widened by 10 m). Never throws.
+std::string CoverageProblem(const io::ReferenceDem& reference,
+                            const std::vector<io::StampedPose>& odometry);
+
+/// @throw std::invalid_argument naming the key if an option is out of range.
+void Validate(const ReferenceOptions& options);
+
+}  // namespace rovermap::mapper

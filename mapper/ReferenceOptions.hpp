@@ -1,0 +1,45 @@
+#pragma once
+// Options of the matches of the rover's DEM against a reference DEM (docs/graph.md,
+// `replay --reference-dem FILE`); the `reference.` keys.
+
+namespace rovermap::mapper {
+
+struct ReferenceOptions {
+  /// [m] path between two matches; > 0.
+  double every_m = 20.0;
+  /// [m] the recent path whose DEM is matched (its cells first seen along it); > 0.
+  double window_m = 40.0;
+  /// Band 2 of the file holds the heights' σ when it has one; false: sigma_m everywhere.
+  bool sigma_band = true;
+  /// [m] σ of the reference's heights where no band gives it; > 0.
+  double sigma_m = 0.5;
+  /// The reference's vertical datum is the sequence's: a match also fixes the height.
+  bool vertical_trusted = false;
+  /// A reference DEM that cannot be used (unreadable, another body, no coverage) stops the
+  /// run (exit 1) instead of being reported and left out.
+  bool required = false;
+  /// [m] horizontal search about the last match's correction (the first: about the chain);
+  /// starts every 1.5 posts within it; >= 0.
+  double search_m = 3.0;
+  /// [deg] heading search about it (starts at −, 0, +); >= 0.
+  double search_yaw_deg = 2.0;
+  /// [ratio] x, y and heading must each hold this many times the information the heights'
+  /// noise alone gives on featureless ground; below it the match is refused as
+  /// ill-conditioned (a plain, ripples of one direction). The match is weighed by what it
+  /// holds beyond that noise; >= 1.
+  double min_relief_ratio = 2.0;
+  /// [ratio] another solution at least a post away whose RMS height difference is within this
+  /// many times the best one's: refused as ambiguous (a periodic dune field); >= 1.
+  double ambiguity_ratio = 1.2;
+  /// [m] a match whose σ of x or y exceeds this is refused; > 0.
+  double max_sigma_m = 1.0;
+  /// [deg] a match whose σ of heading exceeds this is refused; > 0.
+  double max_sigma_deg = 1.0;
+  /// [ratio] the match's covariance × this (neighbouring posts share their errors); >= 1.
+  double covariance_scale = 4.0;
+  /// [count] fewer of the rover's cells (at the reference's posts) with a reference height
+  /// under them: no match; >= 10.
+  int min_posts = 50;
+};
+
+}  // namespace rovermap::mapper

@@ -1,0 +1,310 @@
+// A reference DEM (docs/graph.md): io::ReferenceDem places any GeoTIFF GDAL reads in the
+// sequence's world frame, whatever its CRS, and refuses one it cannot place (no CRS, another
+// body, no heights); mapper::MatchReference registers the rover's DEM onto it, finds a known
+// misplacement within its stated σ, and refuses ground that does not fix the placement (a
+// plane, ripples of one direction) or fixes it more than once (a periodic field).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dem/ElevationMap.hpp"
+#include "io/GeoTiff.hpp"
+#include "io/Georeference.hpp"
+#include "io/IoError.hpp"
+#include "io/ReferenceDem.hpp"
+#include "mapper/ReferenceMatch.hpp"
+#include "tests/support/ScratchDir.hpp"
+
+namespace fs = std::filesystem;
+using namespace rovermap;
+
+namespace {
+
+using Terrain = std::function<double(double, double)>;  // world (x, y) -> z
+
+const io::Georeference& Georef() {
+  static const io::Georeference g(io::GeodeticOrigin{46.5191, 6.5668, 400.0});
+  return g;
+}
+
+// World (x, y) of projected (E, N) near the origin: the inverse of GridToProjected.
+Eigen::Vector2d WorldOfProjected(double e, double n) {
+  const io::Georeference& g = Georef();
+  const Eigen::Vector2d grid = (Eigen::Vector2d(e, n) - g.origin_projected()) / g.scale_factor();
+  return Eigen::Rotation2Dd(-g.convergence_rad()) * grid;
+}
+
+// Bumps of 2-6 m radius, up and down, on a gentle slope: craters' scale of relief.
+Terrain Bumpy() {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> x(-30, 80), y(-40, 40), r(2, 6), a(-1.2, 1.2);
+  std::vector<Eigen::Vector4d> bumps;
+  for (int k = 0; k < 300; ++k) bumps.emplace_back(x(rng), y(rng), r(rng), a(rng));
+  return [bumps](double px, double py) {
+    double z = 0.02 * px;
+    for (const Eigen::Vector4d& b : bumps) {
+      const double d2 = (px - b[0]) * (px - b[0]) + (py - b[1]) * (py - b[1]);
+      z += b[3] * std::exp(-d2 / (2 * b[2] * b[2]));
+    }
+    return z;
+  };
+}
+
+// A north-up 1 m/post reference of `terrain` in the sequence's UTM zone over world
+// [-40, 100] x [-60, 60], heights above the origin's altitude (ELEVATION_DATUM, as rovermap
+// writes its DEMs), with noise of `sigma_m` and that σ in band 2.
+fs::path WriteUtmReference(const fs::path& path, const Terrain& terrain, double sigma_m) {
+  const io::Georeference& g = Georef();
+  io::RasterFrame frame;
+  const double post = 1.0;
+  frame.width = 140;
+  frame.height = 120;
+  const Eigen::Vector2d p0 = g.origin_projected();
+  frame.geotransform = {std::floor(p0.x()) - 40.0, post, 0.0,
+                        std::floor(p0.y()) + 60.0, 0.0,  -post};
+  frame.wkt = g.wkt();
+  frame.metadata = {{"ELEVATION_DATUM", "height above the origin altitude 400.000000 m"}};
+  std::vector<float> z(static_cast<std::size_t>(frame.width) * frame.height);
+  std::vector<float> s(z.size(), static_cast<float>(std::max(sigma_m, 1e-3)));
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, std::max(sigma_m, 1e-12));
+  for (int row = 0; row < frame.height; ++row) {
+    for (int col = 0; col < frame.width; ++col) {
+      const Eigen::Vector2d w = WorldOfProjected(frame.geotransform[0] + (col + 0.5) * post,
+                                                 frame.geotransform[3] - (row + 0.5) * post);
+      z[static_cast<std::size_t>(row) * frame.width + col] =
+          static_cast<float>(terrain(w.x(), w.y()) + noise(rng));
+    }
+  }
+  io::WriteFloatGeoTiff(path, frame, {{&z, "elevation", "m"}, {&s, "sigma", "m"}});
+  return path;
+}
+
+// The same terrain in geographic coordinates (EPSG:4326, 1e-5 degree posts), ellipsoidal
+// heights, one band.
+fs::path WriteGeographicReference(const fs::path& path, const Terrain& terrain) {
+  const io::Georeference& g = Georef();
+  io::RasterFrame frame;
+  frame.width = 120;
+  frame.height = 100;
+  const double step = 1e-5;
+  const Eigen::Vector3d nw = g.EnuToGeodetic(-40.0, 50.0, 0.0);
+  frame.geotransform = {nw.y(), step, 0.0, nw.x(), 0.0, -step};
+  frame.wkt =
+      "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563]],"
+      "PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433],AUTHORITY[\"EPSG\",\"4326\"]]";
+  std::vector<float> z(static_cast<std::size_t>(frame.width) * frame.height);
+  for (int row = 0; row < frame.height; ++row) {
+    for (int col = 0; col < frame.width; ++col) {
+      const double lon = frame.geotransform[0] + (col + 0.5) * step;
+      const double lat = frame.geotransform[3] - (row + 0.5) * step;
+      const Eigen::Vector3d w = g.GeodeticToEnu(lat, lon, 400.0);
+      // Ellipsoidal height of the terrain: world z plus the origin's altitude (the plane's drop
+      // over 100 m, 1 mm, is left to the tolerance).
+      z[static_cast<std::size_t>(row) * frame.width + col] =
+          static_cast<float>(terrain(w.x(), w.y()) + 400.0);
+    }
+  }
+  io::WriteFloatGeoTiff(path, frame, {{&z, "elevation", "m"}});
+  return path;
+}
+
+class ReferenceDemTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = rovermap::testing::ScratchDir(); }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+}  // namespace
+
+// The same plane in UTM and in geographic coordinates comes out at the same world heights.
+TEST_F(ReferenceDemTest, AnyCrsIsPlacedInTheWorldFrame) {
+  const Terrain plane = [](double x, double y) { return 0.1 * x - 0.05 * y + 3.0; };
+  const io::ReferenceDem utm(WriteUtmReference(dir_ / "utm.tif", plane, 0.0), Georef());
+  const io::ReferenceDem geo(WriteGeographicReference(dir_ / "geo.tif", plane), Georef(),
+                             {true, 0.3});
+  EXPECT_NEAR(utm.post_spacing_m(), 1.0, 0.01);
+  EXPECT_NEAR(geo.post_spacing_m(), 0.76, 0.05);  // 1e-5° of longitude at 46.5° N
+  for (const io::ReferenceDem* ref : {&utm, &geo}) {
+    const io::ReferenceGrid grid = ref->Resample({0.0, -20.0}, {30.0, 20.0});
+    ASSERT_GT(grid.ValidNodes(), 500u) << ref->file();
+    for (const Eigen::Vector2d& p : {Eigen::Vector2d(5.3, -12.1), Eigen::Vector2d(24.0, 17.7)}) {
+      EXPECT_NEAR(grid.HeightAt(p.x(), p.y()), plane(p.x(), p.y()), 0.02)
+          << ref->file() << " at " << p.transpose();
+    }
+  }
+  // σ: band 2 of the UTM file (1 mm here), reference.sigma_m for the one-band file.
+  const io::ReferenceGrid g = geo.Resample({0.0, 0.0}, {5.0, 5.0});
+  EXPECT_NEAR(g.sigma_m[g.sigma_m.size() / 2], 0.3, 1e-6);
+  // The footprint covers what was written.
+  EXPECT_TRUE(utm.footprint_world().contains(Eigen::Vector2d(90.0, 50.0)));
+  EXPECT_FALSE(utm.footprint_world().contains(Eigen::Vector2d(120.0, 0.0)));
+}
+
+TEST_F(ReferenceDemTest, OneThatCannotBePlacedIsRefusedNamingTheFileAndWhy) {
+  const Terrain flat = [](double, double) { return 0.0; };
+  const fs::path good = WriteUtmReference(dir_ / "good.tif", flat, 0.1);
+  auto refused = [&](const io::RasterFrame& frame, const std::vector<float>& z,
+                     const std::string& name, const std::string& why) {
+    const fs::path path = dir_ / name;
+    io::WriteFloatGeoTiff(path, frame, {{&z, "elevation", "m"}});
+    try {
+      io::ReferenceDem ref(path, Georef());
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const io::IoError& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  io::RasterFrame frame;
+  frame.width = frame.height = 10;
+  frame.geotransform = {Georef().origin_projected().x(), 1, 0,
+                        Georef().origin_projected().y(), 0, -1};
+  const std::vector<float> z(100, 1.0f);
+  io::RasterFrame no_crs = frame;
+  refused(no_crs, z, "no_crs.tif", "has no CRS");
+  io::RasterFrame local = frame;
+  local.wkt = "LOCAL_CS[\"site grid\",UNIT[\"metre\",1]]";
+  refused(local, z, "local.tif", "cannot be transformed to geographic coordinates");
+  io::RasterFrame mars = frame;
+  mars.wkt =
+      "GEOGCS[\"Mars 2000\",DATUM[\"D_Mars_2000\",SPHEROID[\"Mars_2000_IAU_IAG\",3396190,0]],"
+      "PRIMEM[\"Reference_Meridian\",0],UNIT[\"degree\",0.0174532925199433]]";
+  mars.geotransform = {6.5, 1e-4, 0, 46.6, 0, -1e-4};
+  refused(mars, z, "mars.tif", "is of another body");
+  io::RasterFrame empty = frame;
+  empty.wkt = Georef().wkt();
+  refused(empty, std::vector<float>(100, NAN), "all_nan.tif", "holds no height");
+  EXPECT_THROW(io::ReferenceDem(dir_ / "missing.tif", Georef()), io::IoError);
+  EXPECT_NO_THROW(io::ReferenceDem(good, Georef()));
+}
+
+namespace {
+
+// The rover's DEM over a 40 m strip along x (|y| <= 8 m), first seen in frames 0..20, in the
+// chain's frame: a cell at p holds the terrain at C·p, C the chain's misplacement.
+dem::ElevationMap RoverDem(const Terrain& terrain, const Eigen::Isometry3d& C) {
+  dem::ElevationMapOptions o;
+  o.cell_size_m = 0.2;
+  o.grid_rotation_rad = Georef().convergence_rad();
+  dem::ElevationMap map(o);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (double x = 0.0; x <= 40.0; x += 0.2) {
+    for (double y = -8.0; y <= 8.0; y += 0.2) {
+      const auto cell = map.WorldToCell(x, y);
+      if (!cell) continue;
+      const Eigen::Vector2d c = map.CellCenterWorld(*cell);
+      const Eigen::Vector3d truth = C * Eigen::Vector3d(c.x(), c.y(), 0.0);
+      const std::uint32_t frame = static_cast<std::uint32_t>(std::clamp(c.x() / 2.0, 0.0, 20.0));
+      map.SetCell(*cell, terrain(truth.x(), truth.y()) - truth.z() + noise(rng), 1e-4, std::nullopt,
+                  frame);
+    }
+  }
+  return map;
+}
+
+std::vector<Eigen::Isometry3d> Poses() {
+  std::vector<Eigen::Isometry3d> poses;
+  for (int k = 0; k <= 20; ++k) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(2.0 * k, 0.0, 0.5);
+    poses.push_back(T);
+  }
+  return poses;
+}
+
+Eigen::Isometry3d Misplacement(double dx, double dy, double yaw_deg) {
+  return Eigen::Translation3d(dx, dy, 0.0) *
+         Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+}
+
+mapper::ReferenceMatch Match(const fs::path& dir, const Terrain& terrain,
+                             const Eigen::Isometry3d& C, double sigma_m,
+                             const mapper::ReferenceOptions& options = {}) {
+  const io::ReferenceDem ref(WriteUtmReference(dir / "ref.tif", terrain, sigma_m), Georef());
+  return mapper::MatchReference(RoverDem(terrain, C), ref, 0, Poses(),
+                                Eigen::Isometry3d::Identity(), options,
+                                registration::RegistrationOptions{});
+}
+
+}  // namespace
+
+// A chain 0.6 m and 1° off, a reference of 0.1 m noise: the match finds the misplacement within
+// 3σ of what it states.
+TEST_F(ReferenceDemTest, AMisplacedPatchIsFoundWithinItsSigma) {
+  const Eigen::Isometry3d C = Misplacement(0.6, -0.4, 1.0);
+  const mapper::ReferenceMatch m = Match(dir_, Bumpy(), C, 0.1);
+  ASSERT_TRUE(m.matched) << m.reason;
+  EXPECT_GT(m.posts, 400u);
+  EXPECT_LT(m.rms_after_m, m.rms_before_m);
+  // Where the patch's centre lands, and the heading.
+  const Eigen::Vector3d centre(20.0, 0.0, 0.0);
+  const Eigen::Vector2d error = (m.correction * centre - C * centre).head<2>();
+  EXPECT_LT(std::abs(error.x()), 3.0 * m.sigma_x_m + 0.02) << error.transpose();
+  EXPECT_LT(std::abs(error.y()), 3.0 * m.sigma_y_m + 0.02) << error.transpose();
+  const double yaw = std::atan2(m.correction(1, 0), m.correction(0, 0)) * 180.0 / M_PI;
+  EXPECT_LT(std::abs(yaw - 1.0), 3.0 * m.sigma_yaw_deg + 0.05) << yaw;
+  EXPECT_LT(m.sigma_x_m, 0.3);
+  EXPECT_LT(m.sigma_yaw_deg, 0.6);
+  // The factor sits on a frame of the window, its pose moved as the patch was.
+  EXPECT_LE(m.frame, 20u);
+  const Eigen::Vector3d t = m.T_world_body.translation();
+  const Eigen::Vector3d expected = C * Poses()[m.frame].translation();
+  EXPECT_LT((t - expected).head<2>().norm(), 3.0 * std::hypot(m.sigma_x_m, m.sigma_y_m) + 0.05);
+  EXPECT_FALSE(m.vertical_absolute);
+  EXPECT_GT(m.information(2, 2), 0.0);
+  // Roll is not held: what it has comes through the lever from the patch's centre to the frame
+  // (a tilt of the frame moves the patch by its height above it).
+  EXPECT_LT(m.information(0, 0), 0.01 * m.information(2, 2));
+}
+
+TEST_F(ReferenceDemTest, APlaneIsRefusedAsIllConditioned) {
+  const Terrain plane = [](double x, double y) { return 0.03 * x + 0.01 * y; };
+  const mapper::ReferenceMatch m = Match(dir_, plane, Misplacement(0.3, 0.2, 0.5), 0.2);
+  EXPECT_FALSE(m.matched);
+  EXPECT_NE(m.reason.find("ill-conditioned"), std::string::npos) << m.reason;
+}
+
+// Ripples across x: x is fixed (up to their wavelength), y along their crests is not.
+TEST_F(ReferenceDemTest, RipplesOfOneDirectionAreRefusedNamingTheFreeDirection) {
+  const Terrain ripples = [](double x, double) { return 0.4 * std::sin(2.0 * M_PI * x / 7.0); };
+  const mapper::ReferenceMatch m = Match(dir_, ripples, Misplacement(0.3, 0.2, 0.0), 0.05);
+  EXPECT_FALSE(m.matched);
+  EXPECT_TRUE(m.reason.find("ill-conditioned: y") != std::string::npos ||
+              m.reason.find("ambiguous") != std::string::npos)
+      << m.reason;
+}
+
+// An egg-crate of 5 m: every 5 m the same relief, and the search reaches the next one.
+TEST_F(ReferenceDemTest, APeriodicFieldIsRefusedAsAmbiguous) {
+  const Terrain crate = [](double x, double y) {
+    return 0.5 * std::sin(2.0 * M_PI * x / 5.0) * std::sin(2.0 * M_PI * y / 5.0);
+  };
+  mapper::ReferenceOptions o;
+  o.search_m = 6.0;
+  const mapper::ReferenceMatch m = Match(dir_, crate, Misplacement(0.3, 0.2, 0.0), 0.05, o);
+  EXPECT_FALSE(m.matched);
+  EXPECT_NE(m.reason.find("ambiguous"), std::string::npos) << m.reason;
+}
+
+TEST_F(ReferenceDemTest, BadOptionsAreRefusedNamingTheKey) {
+  mapper::ReferenceOptions o;
+  o.every_m = 0.0;
+  EXPECT_THROW(mapper::Validate(o), std::invalid_argument);
+  o = {};
+  o.min_relief_ratio = 0.5;
+  try {
+    mapper::Validate(o);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("reference.min_relief_ratio"), std::string::npos);
+  }
+}

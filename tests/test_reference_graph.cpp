@@ -1,0 +1,243 @@
+// `rovermap replay --reference-dem FILE` (docs/graph.md): a simulated 300 m cratered traverse
+// whose dead reckoning errs by 5 % of its distance, matched every 20 m against a 1 m/post
+// reference DEM of the true terrain with 0.2 m of noise and a 0.5 m georeferencing error. The
+// graph's ATE is at most 0.3× the frame-to-frame one and does not grow along the traverse; on
+// a plain the matches are refused and the result is the frame-to-frame one; a reference that
+// cannot be used is reported and left out, or stops the run when it is required.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "io/GeoTiff.hpp"
+#include "io/Georeference.hpp"
+#include "io/Sequence.hpp"
+#include "io/Tum.hpp"
+#include "tests/support/CommandFixture.hpp"
+#include "tests/support/DriftCsv.hpp"
+#include "tests/support/Sanitizers.hpp"
+#include "tests/support/ScratchDir.hpp"
+
+namespace fs = std::filesystem;
+using rovermap::testing::CommandResult;
+using rovermap::testing::ReadCsv;
+using rovermap::testing::RunRovermapIn;
+using rovermap::testing::Slurp;
+
+namespace {
+
+const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";
+
+// The 300 m loop of test_gnss_graph, on cratered ground (planetary relief at the reference's
+// scale), `extra` simulator keys on top.
+const std::string kTraverse =
+    " --set sim.sensor=cloud --set sim.frames=150 --set sim.frame_rate_hz=1"
+    " --set sim.speed_m_s=2 --set sim.terrain_size_m=400 --set sim.terrain_cell_m=0.2"
+    " --set sim.turn_radius_m=40 --set sim.path=loop --set sim.start_y_m=-40"
+    " --set sim.odom_scale_error=0.05 --set sim.reference_post_m=1 --set dem.cell_size_m=0.2";
+const std::string kReplay = " --set dem.cell_size_m=0.2 --set octomap.enabled=false";
+
+// Per frame, the horizontal error of `estimate` against the truth after removing their mean
+// difference (the reference's georeferencing error moves the whole trajectory).
+std::vector<double> HorizontalErrors(const fs::path& estimate, const fs::path& truth) {
+  const auto e = rovermap::io::ReadTum(estimate);
+  const auto t = rovermap::io::ReadTum(truth);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (std::size_t k = 0; k < e.size(); ++k)
+    mean += (e[k].T_world_body.translation() - t[k].T_world_body.translation()).head<2>();
+  mean /= static_cast<double>(e.size());
+  std::vector<double> out;
+  for (std::size_t k = 0; k < e.size(); ++k)
+    out.push_back(
+        ((e[k].T_world_body.translation() - t[k].T_world_body.translation()).head<2>() - mean)
+            .norm());
+  return out;
+}
+
+double Rms(const std::vector<double>& v, std::size_t from, std::size_t to) {
+  double s = 0.0;
+  for (std::size_t k = from; k < to; ++k) s += v[k] * v[k];
+  return std::sqrt(s / static_cast<double>(to - from));
+}
+
+class ReferenceGraph : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (rovermap::testing::kSanitizedBuild) GTEST_SKIP() << "statistics: the Release suite";
+  }
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(rovermap::testing::ScratchDir());
+    if (rovermap::testing::kSanitizedBuild) return;
+    const std::string seq = (*dir_ / "seq").string();
+    const CommandResult sim =
+        RunRovermapIn(*dir_, "simulate --out " + seq + kTraverse +
+                                 " --set sim.craters=800 --set sim.crater_max_radius_m=10");
+    ASSERT_EQ(sim.status, 0) << sim.err;
+    const CommandResult with =
+        RunRovermapIn(*dir_, "replay " + seq + " --out " + (*dir_ / "graph").string() +
+                                 " --reference-dem " + seq + "/reference_dem.tif" + kReplay);
+    ASSERT_EQ(with.status, 0) << with.err;
+    *err_ = with.err;
+    // The same ground without craters: the default relief, which 1 m posts of 0.2 m noise
+    // cannot place (docs/graph.md).
+    const std::string plain = (*dir_ / "plain").string();
+    ASSERT_EQ(RunRovermapIn(*dir_, "simulate --out " + plain + kTraverse).status, 0);
+    const CommandResult refused =
+        RunRovermapIn(*dir_, "replay " + plain + " --out " + (*dir_ / "plain_out").string() +
+                                 " --reference-dem " + plain + "/reference_dem.tif" + kReplay);
+    ASSERT_EQ(refused.status, 0) << refused.err;
+    *plain_err_ = refused.err;
+    const CommandResult without = RunRovermapIn(
+        *dir_, "replay " + plain + " --out " + (*dir_ / "plain_f2f").string() + kReplay);
+    ASSERT_EQ(without.status, 0) << without.err;
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
+    delete dir_;
+  }
+  static nlohmann::json Summary(const std::string& out) {
+    return nlohmann::json::parse(Slurp(*dir_ / out / "summary.json"));
+  }
+  // The checks, each on the traverses simulated once (gtest_discover_tests runs every TEST in a
+  // process of its own, so one TEST holds them all).
+  void ThreeHundredMetresOnCrateredGround();
+  void OnAPlainEveryMatchIsRefusedAndTheResultIsTheFrameToFrameOne();
+
+  static fs::path* dir_;
+  static inline std::string* err_ = new std::string;
+  static inline std::string* plain_err_ = new std::string;
+};
+fs::path* ReferenceGraph::dir_ = nullptr;
+
+}  // namespace
+
+void ReferenceGraph::ThreeHundredMetresOnCrateredGround() {
+  const nlohmann::json s = Summary("graph");
+  const nlohmann::json& g = s["graph"];
+  ASSERT_TRUE(g["solved"].get<bool>()) << g.dump(2);
+  const double ate = s["metrics"]["registered"]["ate_rmse_m"].get<double>();
+  const double f2f = s["metrics"]["frame_to_frame"]["ate_rmse_m"].get<double>();
+  std::printf("ATE: graph %.3f m, frame to frame %.3f m; matches %zu used of %zu\n", ate, f2f,
+              g["reference_used"].get<std::size_t>(), g["reference_matches"].get<std::size_t>());
+  // Measured: 0.20 m against 1.83 m, 15 of 15 matches used.
+  EXPECT_GT(f2f, 0.8);
+  EXPECT_LT(ate, 0.3 * f2f);
+  EXPECT_GE(g["reference_used"].get<int>(), 10);
+  EXPECT_EQ(g["reference_rejected"], 0);
+  // Bounded: the last third of the traverse is no worse than the first (the frame-to-frame
+  // error more than doubles over the same frames).
+  const auto graph =
+      HorizontalErrors(*dir_ / "graph/trajectory.tum", *dir_ / "seq/groundtruth.tum");
+  const auto chain =
+      HorizontalErrors(*dir_ / "graph/trajectory_f2f.tum", *dir_ / "seq/groundtruth.tum");
+  const std::size_t n = graph.size();
+  std::printf("horizontal RMS, first and last third: graph %.3f %.3f m, chain %.3f %.3f m\n",
+              Rms(graph, 0, n / 3), Rms(graph, n - n / 3, n), Rms(chain, 0, n / 3),
+              Rms(chain, n - n / 3, n));
+  EXPECT_LT(Rms(graph, n - n / 3, n), std::max(1.5 * Rms(graph, 0, n / 3), 0.3));
+  // Each match says what became of it, in drift.csv and summary.json.
+  std::size_t used_rows = 0;
+  for (const auto& row : ReadCsv(*dir_ / "graph/drift.csv"))
+    used_rows += row.at("reference") == "used";
+  EXPECT_EQ(used_rows, g["reference_used"].get<std::size_t>());
+  for (const auto& m : g["reference"]) {
+    EXPECT_TRUE(m.contains("sigma_x_m") && m.contains("relief_ratio") && m.contains("reason"));
+  }
+  EXPECT_NE(err_->find("replay: reference match, frames"), std::string::npos) << *err_;
+}
+
+void ReferenceGraph::OnAPlainEveryMatchIsRefusedAndTheResultIsTheFrameToFrameOne() {
+  const nlohmann::json g = Summary("plain_out")["graph"];
+  EXPECT_FALSE(g["solved"].get<bool>());
+  EXPECT_GT(g["reference_matches"].get<int>(), 10);
+  EXPECT_EQ(g["reference_refused"], g["reference_matches"]);
+  for (const auto& m : g["reference"]) {
+    EXPECT_EQ(m["status"], "refused");
+    EXPECT_NE(m["reason"].get<std::string>().find("ill-conditioned"), std::string::npos) << m;
+  }
+  EXPECT_EQ(Slurp(*dir_ / "plain_out/trajectory.tum"), Slurp(*dir_ / "plain_f2f/trajectory.tum"));
+  EXPECT_NE(plain_err_->find("refused: ill-conditioned"), std::string::npos) << *plain_err_;
+  for (const auto& row : ReadCsv(*dir_ / "plain_out/drift.csv")) {
+    EXPECT_TRUE(row.at("reference") == "refused" || row.at("reference") == "none");
+  }
+}
+
+TEST_F(ReferenceGraph, CrateredGroundIsHeldAndAPlainRefused) {
+  {
+    SCOPED_TRACE("300 m on cratered ground: ATE at most 0.3x frame to frame, bounded");
+    ThreeHundredMetresOnCrateredGround();
+  }
+  {
+    SCOPED_TRACE("on a plain every match refused, the frame-to-frame result");
+    OnAPlainEveryMatchIsRefusedAndTheResultIsTheFrameToFrameOne();
+  }
+}
+
+// A reference that cannot be used: the run goes on without it and says why (exit 0), unless
+// reference.required, when it stops before writing anything (exit 1) naming the file.
+class ReferenceInput : public rovermap::testing::CommandFixture {
+ protected:
+  // A raster `width` x `height` of `value` in the tiny sequence's UTM zone, `offset_m` east of
+  // its origin, with `wkt` (the sequence's CRS when empty).
+  fs::path Raster(const std::string& name, float value, double offset_m, std::string wkt = "") {
+    const rovermap::io::SequenceInfo info = rovermap::io::ReadSequenceInfo(kTinyCloud);
+    const rovermap::io::Georeference georef(info.origin);
+    rovermap::io::RasterFrame frame;
+    frame.width = frame.height = 60;
+    const Eigen::Vector2d p0 = georef.origin_projected();
+    frame.geotransform = {p0.x() - 30.0 + offset_m, 1.0, 0.0, p0.y() + 30.0, 0.0, -1.0};
+    frame.wkt = wkt.empty() ? georef.wkt() : wkt;
+    const std::vector<float> z(3600, value);
+    const fs::path path = dir_ / name;
+    rovermap::io::WriteFloatGeoTiff(path, frame, {{&z, "elevation", "m"}});
+    return path;
+  }
+  CommandResult Replay(const fs::path& reference, const std::string& out,
+                       const std::string& extra = "") {
+    return Rovermap("replay " + kTinyCloud.string() + " --out " + (dir_ / out).string() +
+                    " --reference-dem " + reference.string() + " --set octomap.enabled=false" +
+                    extra);
+  }
+};
+
+TEST_F(ReferenceInput, ElsewhereAllNanOrOfAnotherBodyIsLeftOutAndSaid) {
+  const std::string mars =
+      "GEOGCS[\"Mars 2000\",DATUM[\"D_Mars_2000\",SPHEROID[\"Mars_2000_IAU_IAG\",3396190,0]],"
+      "PRIMEM[\"Reference_Meridian\",0],UNIT[\"degree\",0.0174532925199433]]";
+  const struct {
+    fs::path file;
+    std::string why;
+  } cases[] = {{Raster("far.tif", 1.0f, 5000.0), "does not cover the traverse"},
+               {Raster("nan.tif", NAN, 0.0), "holds no height"},
+               {Raster("mars.tif", 1.0f, 0.0, mars), "is of another body"},
+               {dir_ / "missing.tif", "missing.tif"}};
+  int k = 0;
+  for (const auto& c : cases) {
+    const std::string out = "out" + std::to_string(k++);
+    const CommandResult r = Replay(c.file, out);
+    EXPECT_EQ(r.status, 0) << c.file << "\n" << r.err;
+    EXPECT_NE(r.err.find("reference DEM left out"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.why), std::string::npos) << r.err;
+    const nlohmann::json s = nlohmann::json::parse(Slurp(dir_ / out / "summary.json"));
+    EXPECT_NE(s["graph"]["reference_unusable"].get<std::string>().find(c.why), std::string::npos)
+        << s["graph"].dump(2);
+    EXPECT_FALSE(s["graph"]["solved"].get<bool>());
+  }
+}
+
+TEST_F(ReferenceInput, RequiredAndUnusableStopsBeforeAnyOutput) {
+  const fs::path far = Raster("far.tif", 1.0f, 5000.0);
+  const CommandResult r = Replay(far, "out", " --set reference.required=true");
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find(far.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not cover the traverse"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "summary.json"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "dem.tif"));
+  const CommandResult bad_key = Replay(far, "out2", " --set reference.every_m=0");
+  EXPECT_EQ(bad_key.status, 2) << bad_key.err;
+  EXPECT_NE(bad_key.err.find("reference.every_m"), std::string::npos) << bad_key.err;
+}
