@@ -186,13 +186,19 @@ int RunReplay(const ReplayArgs& args) {
           mapper->SkipFrame(item.index, odom.timestamp, odom.T_world_body,
                             mapper::FallbackReason::kBadFrame, item.error, truth);
       progress.Frame(r, MsSince(start));
+      if (track) track->AfterFrame(*mapper, {});
       continue;
+    }
+    // The reference DEM's matches take the frame's own points (mapper/Patches).
+    mapper::FrameBins bins;
+    if (track && item.prepared.loaded.ok) {
+      bins = mapper::BinFrame(item.prepared.Fused(), item.prepared.isolated.keep);
     }
     const mapper::FrameResult r =
         mapper->ProcessPrepared(*item.frame, std::move(item.prepared), item.load_ms);
     progress.Frame(r, MsSince(start));
     if (track) {
-      if (const std::optional<mapper::ReferenceMatch> m = track->AfterFrame(*mapper)) {
+      if (const std::optional<mapper::ReferenceMatch> m = track->AfterFrame(*mapper, bins)) {
         std::ostringstream line;
         line << std::fixed << std::setprecision(2) << "replay: reference match, frames "
              << m->first_frame << "-" << m->last_frame << ": ";

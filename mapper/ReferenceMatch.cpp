@@ -20,11 +20,8 @@ namespace {
 using core::kRadToDeg;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
-// The rover's cells averaged at one reference post.
-struct Post {
-  Eigen::Vector3d p;  // world: the cells' weighted centre and inverse-variance mean height
-  double sigma = 0.0;
-};
+// [m] the rover's posts' σ in the matcher's weights and gate.
+constexpr double kPostSigmaM = 0.05;
 
 std::string Figure(double v, int digits) {
   char text[32];
@@ -36,46 +33,6 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
   return m;
-}
-
-// The rover's published cells first seen in [first, last], averaged per post of `grid`'s
-// lattice (a post needs a quarter of its cells).
-std::vector<Post> PatchPosts(const dem::ElevationMap& map, std::size_t first, std::size_t last,
-                             const io::ReferenceGrid& grid) {
-  struct Sum {
-    double w = 0, wz = 0, var = 0;
-    Eigen::Vector2d wxy{0, 0};
-    int cells = 0;
-  };
-  std::vector<Sum> sums(static_cast<std::size_t>(grid.width) * grid.height);
-  const double s = grid.spacing_m;
-  map.ForEachCell([&](dem::CellIndex cell, const dem::CellValue& v) {
-    if (v.first_frame < first || v.first_frame > last) return;
-    if (!std::isfinite(v.elevation_m) || !(v.variance_m2 > 0.0f)) return;
-    const Eigen::Vector2d xy = map.CellCenterWorld(cell);
-    const long col = std::lround((xy.x() - grid.origin_world.x()) / s);
-    const long row = std::lround((xy.y() - grid.origin_world.y()) / s);
-    if (col < 0 || row < 0 || col >= grid.width || row >= grid.height) return;
-    Sum& sum = sums[static_cast<std::size_t>(row) * grid.width + static_cast<std::size_t>(col)];
-    const double w = 1.0 / v.variance_m2;
-    sum.w += w;
-    sum.wz += w * v.elevation_m;
-    sum.var += v.variance_m2;
-    sum.wxy += w * xy;
-    ++sum.cells;
-  });
-  const double cell = map.options().cell_size_m;
-  const int needed = std::max(1, static_cast<int>(0.1 * (s / cell) * (s / cell)));
-  std::vector<Post> posts;
-  for (const Sum& sum : sums) {
-    if (sum.cells < needed) continue;
-    const Eigen::Vector2d xy = sum.wxy / sum.w;
-    // Neighbouring cells share their errors (the pose's, the stereo's): their RMS σ, not the
-    // σ of a mean of independent cells.
-    posts.push_back(
-        {Eigen::Vector3d(xy.x(), xy.y(), sum.wz / sum.w), std::sqrt(sum.var / sum.cells)});
-  }
-  return posts;
 }
 
 // Local coordinates: the rover's posts about `source` (their centre), the reference about
@@ -237,7 +194,7 @@ void Validate(const ReferenceOptions& o) {
   if (o.min_posts < 10) fail("min_posts", ">= 10");
 }
 
-ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceDem& reference,
+ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::ReferenceDem& reference,
                               std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
                               const Eigen::Isometry3d& seed, const ReferenceOptions& options,
                               const registration::RegistrationOptions& registration) {
@@ -254,13 +211,9 @@ ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceD
   };
   if (poses.empty()) return done("no frames in the window");
 
-  // The window's cells, averaged at the reference's posts (a lattice aligned with its grid).
   Eigen::AlignedBox2d box;
-  map.ForEachCell([&](dem::CellIndex cell, const dem::CellValue& v) {
-    if (v.first_frame >= out.first_frame && v.first_frame <= out.last_frame)
-      box.extend(map.CellCenterWorld(cell));
-  });
-  if (box.isEmpty()) return done("no cells of the window's frames in the DEM");
+  for (const Post& post : posts) box.extend(post.p.head<2>());
+  if (box.isEmpty()) return done("no points of the window's frames");
   const double margin = options.search_m + 3.0 * reference.post_spacing_m() +
                         box.diagonal().norm() * std::sin(options.search_yaw_deg / kRadToDeg);
   // The patch in the frame the seed places it in: the box moved by the seed, widened.
@@ -273,14 +226,7 @@ ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceD
   const io::ReferenceGrid grid = reference.Resample(placed.min() - pad, placed.max() + pad);
   if (grid.ValidNodes() == 0)
     return done("no reference height under the window (outside the reference DEM)");
-  // The patch's posts: its own lattice, in its own (chained) place.
-  io::ReferenceGrid lattice;
-  lattice.spacing_m = grid.spacing_m;
   const double s = grid.spacing_m;
-  lattice.origin_world = (box.min() / s).array().floor().matrix() * s;
-  lattice.width = static_cast<int>(std::ceil((box.max().x() - lattice.origin_world.x()) / s)) + 2;
-  lattice.height = static_cast<int>(std::ceil((box.max().y() - lattice.origin_world.y()) / s)) + 2;
-  const std::vector<Post> posts = PatchPosts(map, out.first_frame, out.last_frame, lattice);
   out.posts = posts.size();
 
   // Local coordinates about the patch's centre: rotations turn the patch about itself.
@@ -304,7 +250,10 @@ ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceD
   registration::PointCloud source, target;
   for (const Post& post : posts) {
     source.points.push_back(post.p - origin);
-    source.covariances.push_back(Eigen::Vector3d(1e-6, 1e-6, post.sigma * post.sigma).asDiagonal());
+    // The rover's posts weigh alike in the matcher; their scatter enters the match's σ through
+    // the RMS height difference (HeightInformation).
+    source.covariances.push_back(
+        Eigen::Vector3d(1e-6, 1e-6, kPostSigmaM * kPostSigmaM).asDiagonal());
   }
   const double footprint = s * s / 12.0;  // a post stands for its cell
   for (int row = 0; row < grid.height; ++row) {
@@ -507,8 +456,10 @@ ReferenceTrack::ReferenceTrack(const io::ReferenceDem& reference, const Referenc
   Validate(options_);
 }
 
-std::optional<ReferenceMatch> ReferenceTrack::AfterFrame(const Mapper& mapper) {
+std::optional<ReferenceMatch> ReferenceTrack::AfterFrame(const Mapper& mapper,
+                                                         const FrameBins& bins) {
   const std::vector<FrameResult>& results = mapper.results();
+  if (results.empty()) return std::nullopt;
   while (path_m_.size() < results.size()) {
     const std::size_t k = path_m_.size();
     path_m_.push_back(k == 0 ? 0.0
@@ -516,15 +467,17 @@ std::optional<ReferenceMatch> ReferenceTrack::AfterFrame(const Mapper& mapper) {
                                                  results[k - 1].step.T_world_body.translation())
                                                     .norm());
   }
-  if (results.empty() || path_m_.back() - last_match_m_ < options_.every_m) return std::nullopt;
-  last_match_m_ = path_m_.back();
   const std::size_t last = results.size() - 1;
+  patches_.Add(last, results[last].step.T_world_body, bins);
   std::size_t first = last;
   while (first > 0 && path_m_.back() - path_m_[first - 1] <= options_.window_m) --first;
+  patches_.DropBefore(first);
+  if (path_m_.back() - last_match_m_ < options_.every_m) return std::nullopt;
+  last_match_m_ = path_m_.back();
   std::vector<Eigen::Isometry3d> poses;
   for (std::size_t k = first; k <= last; ++k) poses.push_back(results[k].step.T_world_body);
-  ReferenceMatch match = MatchReference(mapper.elevation_map(), reference_, first, poses, seed_,
-                                        options_, registration_);
+  ReferenceMatch match = MatchReference(patches_.Window(first, last, reference_.post_spacing_m()),
+                                        reference_, first, poses, seed_, options_, registration_);
   if (match.matched) seed_ = match.correction;
   matches_.push_back(match);
   return match;

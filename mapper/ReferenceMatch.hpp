@@ -1,7 +1,7 @@
 #pragma once
-// Matches of the rover's recent DEM against a reference DEM (docs/graph.md): every
-// ReferenceOptions::every_m metres the cells first seen along the last window_m metres are
-// averaged at the reference's posts and registered onto it with the project's matcher
+// Matches of the rover's recent ground against a reference DEM (docs/graph.md): every
+// ReferenceOptions::every_m metres the points of the frames along the last window_m metres are
+// averaged at the reference's posts (Patches) and registered onto it with the project's matcher
 // (point-to-plane, weighted by both DEMs' σ), from several starts over the search region. A
 // match that is ill-conditioned or ambiguous is refused and says why; a good one becomes an
 // absolute factor on x, y, heading and height (the height up to the reference's vertical
@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "dem/ElevationMap.hpp"
 #include "io/ReferenceDem.hpp"
 #include "io/Tum.hpp"
+#include "mapper/Patches.hpp"
 #include "mapper/ReferenceOptions.hpp"
 #include "registration/Options.hpp"
 
@@ -58,24 +58,25 @@ struct ReferenceMatch {
   double ms = 0.0;
 };
 
-/// One match: the published cells of `map` first seen in frames [first_frame, last_frame],
-/// registered onto `reference` from starts about `seed` (a world-to-world correction).
-/// `poses` are the window's frames' chained T_world_body, first_frame first. Never throws on
-/// data: a refused match says why.
-ReferenceMatch MatchReference(const dem::ElevationMap& map, const io::ReferenceDem& reference,
+/// One match: `posts` (the window's ground, frames first_frame.. on), registered onto
+/// `reference` from starts about `seed` (a world-to-world correction). `poses` are the window's
+/// frames' chained T_world_body, first_frame first. Never throws on data: a refused match says
+/// why.
+ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::ReferenceDem& reference,
                               std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
                               const Eigen::Isometry3d& seed, const ReferenceOptions& options,
                               const registration::RegistrationOptions& registration);
 
-/// When to match during a replay: after each frame, AfterFrame matches once the path since the
-/// last match reaches every_m, the window being the frames of the last window_m metres; each
-/// match is seeded with the last accepted one's correction.
+/// When to match during a replay: after each frame (its points binned by BinFrame before it
+/// was processed; empty bins for a frame that was not fused), AfterFrame matches once the path
+/// since the last match reaches every_m, the window being the frames of the last window_m
+/// metres; each match is seeded with the last accepted one's correction.
 class ReferenceTrack {
  public:
   ReferenceTrack(const io::ReferenceDem& reference, const ReferenceOptions& options,
                  const registration::RegistrationOptions& registration);
   /// @return the match made after the mapper's last frame, if one was due.
-  std::optional<ReferenceMatch> AfterFrame(const Mapper& mapper);
+  std::optional<ReferenceMatch> AfterFrame(const Mapper& mapper, const FrameBins& bins);
   const std::vector<ReferenceMatch>& matches() const { return matches_; }
 
  private:
@@ -85,6 +86,7 @@ class ReferenceTrack {
   std::vector<double> path_m_;  // path length at each frame
   double last_match_m_ = 0.0;
   Eigen::Isometry3d seed_ = Eigen::Isometry3d::Identity();
+  PatchAccumulator patches_;
   std::vector<ReferenceMatch> matches_;
 };
 

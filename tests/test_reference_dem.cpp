@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "dem/ElevationMap.hpp"
 #include "io/GeoTiff.hpp"
 #include "io/Georeference.hpp"
 #include "io/IoError.hpp"
 #include "io/ReferenceDem.hpp"
+#include "mapper/Patches.hpp"
 #include "mapper/ReferenceMatch.hpp"
 #include "tests/support/ScratchDir.hpp"
 
@@ -188,27 +188,20 @@ TEST_F(ReferenceDemTest, OneThatCannotBePlacedIsRefusedNamingTheFileAndWhy) {
 
 namespace {
 
-// The rover's DEM over a 40 m strip along x (|y| <= 8 m), first seen in frames 0..20, in the
-// chain's frame: a cell at p holds the terrain at C·p, C the chain's misplacement.
-dem::ElevationMap RoverDem(const Terrain& terrain, const Eigen::Isometry3d& C) {
-  dem::ElevationMapOptions o;
-  o.cell_size_m = 0.2;
-  o.grid_rotation_rad = Georef().convergence_rad();
-  dem::ElevationMap map(o);
+// The rover's ground over a 40 m strip along x (|y| <= 8 m), as PatchAccumulator gives it: posts
+// at 1 m in the chain's frame, a post at p holding the terrain at C·p (C the chain's
+// misplacement), 1 cm of noise.
+std::vector<mapper::Post> RoverPosts(const Terrain& terrain, const Eigen::Isometry3d& C) {
+  std::vector<mapper::Post> posts;
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.01);
-  for (double x = 0.0; x <= 40.0; x += 0.2) {
-    for (double y = -8.0; y <= 8.0; y += 0.2) {
-      const auto cell = map.WorldToCell(x, y);
-      if (!cell) continue;
-      const Eigen::Vector2d c = map.CellCenterWorld(*cell);
-      const Eigen::Vector3d truth = C * Eigen::Vector3d(c.x(), c.y(), 0.0);
-      const std::uint32_t frame = static_cast<std::uint32_t>(std::clamp(c.x() / 2.0, 0.0, 20.0));
-      map.SetCell(*cell, terrain(truth.x(), truth.y()) - truth.z() + noise(rng), 1e-4, std::nullopt,
-                  frame);
+  for (double x = 0.0; x <= 40.0; x += 1.0) {
+    for (double y = -8.0; y <= 8.0; y += 1.0) {
+      const Eigen::Vector3d truth = C * Eigen::Vector3d(x, y, 0.0);
+      posts.push_back({Eigen::Vector3d(x, y, terrain(truth.x(), truth.y()) + noise(rng)), 25});
     }
   }
-  return map;
+  return posts;
 }
 
 std::vector<Eigen::Isometry3d> Poses() {
@@ -230,7 +223,7 @@ mapper::ReferenceMatch Match(const fs::path& dir, const Terrain& terrain,
                              const Eigen::Isometry3d& C, double sigma_m,
                              const mapper::ReferenceOptions& options = {}) {
   const io::ReferenceDem ref(WriteUtmReference(dir / "ref.tif", terrain, sigma_m), Georef());
-  return mapper::MatchReference(RoverDem(terrain, C), ref, 0, Poses(),
+  return mapper::MatchReference(RoverPosts(terrain, C), ref, 0, Poses(),
                                 Eigen::Isometry3d::Identity(), options,
                                 registration::RegistrationOptions{});
 }
@@ -307,4 +300,36 @@ TEST_F(ReferenceDemTest, BadOptionsAreRefusedNamingTheKey) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("reference.min_relief_ratio"), std::string::npos);
   }
+}
+
+// A frame's points binned in its body frame and placed by its pose; a window merges frames at a
+// post spacing and forgets the frames dropped.
+TEST(Patches, FramesArePlacedByTheirPosesAndMergedAtThePostSpacing) {
+  registration::PointCloud cloud;
+  for (double x = 0.05; x < 4.0; x += 0.1)
+    for (double y = -2.0 + 0.05; y < 2.0; y += 0.1) cloud.points.emplace_back(x, y, 0.2 * x);
+  std::vector<unsigned char> keep(cloud.size(), 1);
+  keep[0] = 0;
+  cloud.points[0].z() = 100.0;  // flagged: must not count
+  const mapper::FrameBins bins = mapper::BinFrame(cloud, keep);
+  ASSERT_FALSE(bins.sum.empty());
+  mapper::PatchAccumulator acc;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(10.0, 5.0, 1.0);
+  acc.Add(0, T, bins);
+  T.translation().x() += 4.0;
+  acc.Add(1, T, bins);
+  const std::vector<mapper::Post> posts = acc.Window(0, 1, 1.0);
+  ASSERT_GE(posts.size(), 30u);
+  for (const mapper::Post& p : posts) {
+    // The plane z = 0.2 x in each frame's body: world z = 1 + 0.2 (x_world − frame's x); the
+    // post at the seam (x 13.5-14.5) holds both frames' points.
+    if (std::abs(p.p.x() - 14.0) < 0.6) continue;
+    const double body_x = p.p.x() < 14.0 ? p.p.x() - 10.0 : p.p.x() - 14.0;
+    EXPECT_NEAR(p.p.z(), 1.0 + 0.2 * body_x, 0.11) << p.p.transpose();
+    EXPECT_GE(p.p.x(), 10.0);
+    EXPECT_LE(p.p.x(), 18.0);
+  }
+  acc.DropBefore(1);
+  for (const mapper::Post& p : acc.Window(0, 1, 1.0)) EXPECT_GE(p.p.x(), 13.9);
 }

@@ -1,0 +1,56 @@
+#pragma once
+// The rover's own recent ground as height posts, for the matches against a reference DEM
+// (ReferenceMatch): every frame's points binned in its body frame (0.25 m bins, before the pose
+// is known), placed in the world by its chained pose, and merged over a window of frames at a
+// post spacing. Kept apart from the DEM: the DEM fuses a revisit into the cells of the first
+// pass, and its publication rules leave out the far, sparse ground a match needs.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <deque>
+#include <vector>
+
+#include "registration/PointCloud.hpp"
+
+namespace rovermap::mapper {
+
+/// One height post: the mean of the points over it, at their centroid (world frame).
+struct Post {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  std::size_t points = 0;
+};
+
+/// A frame's points binned in its body frame: per bin the sum of the points and their count.
+struct FrameBins {
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<std::size_t> count;
+};
+
+/// Bins `points_body` (those `keep` marks, all when empty) in 0.25 m squares of body x, y.
+/// Never throws.
+FrameBins BinFrame(const registration::PointCloud& points_body,
+                   const std::vector<unsigned char>& keep);
+
+/// The last frames' bins, placed in the world.
+class PatchAccumulator {
+ public:
+  /// Adds frame `frame` (frames in increasing order) with its chained pose.
+  void Add(std::size_t frame, const Eigen::Isometry3d& T_world_body, const FrameBins& bins);
+  /// Forgets the frames before `frame`.
+  void DropBefore(std::size_t frame);
+  /// The posts of frames [first, last] on the world lattice of `spacing_m` (multiples of it),
+  /// each from at least `min_points` points. Never throws.
+  std::vector<Post> Window(std::size_t first, std::size_t last, double spacing_m,
+                           std::size_t min_points = 3) const;
+
+ private:
+  struct Placed {
+    std::size_t frame = 0;
+    std::vector<Eigen::Vector3d> centroid;  // world
+    std::vector<std::size_t> count;
+  };
+  std::deque<Placed> frames_;
+};
+
+}  // namespace rovermap::mapper
