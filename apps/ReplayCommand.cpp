@@ -171,6 +171,17 @@ int RunReplay(const ReplayArgs& args) {
     }
   }
 
+  // Revisits: the recent ground matched onto the rover's own earlier ground (loop factors).
+  std::unique_ptr<mapper::RevisitTrack> revisit;
+  if (cfg.revisit.enabled && cfg.graph.enabled) {
+    try {
+      revisit =
+          std::make_unique<mapper::RevisitTrack>(cfg.revisit, cfg.reference, cfg.registration);
+    } catch (const std::invalid_argument& e) {
+      throw config::ConfigError(e.what());
+    }
+  }
+
   Progress progress(source->frame_count());
   // Frame k+1 is read and prepared (stereo, index, outlier flags) while frame k is registered
   // and fused: on the 2-core machine that fills the cores the matcher leaves idle.
@@ -187,11 +198,12 @@ int RunReplay(const ReplayArgs& args) {
                             mapper::FallbackReason::kBadFrame, item.error, truth);
       progress.Frame(r, MsSince(start));
       if (track) track->AfterFrame(*mapper, {});
+      if (revisit) revisit->AfterFrame(*mapper, {});
       continue;
     }
     // The reference DEM's matches take the frame's own points (mapper/Patches).
     mapper::FrameBins bins;
-    if (track && item.prepared.loaded.ok) {
+    if ((track || revisit) && item.prepared.loaded.ok) {
       bins = mapper::BinFrame(item.prepared.Fused(), item.prepared.isolated.keep);
     }
     const mapper::FrameResult r =
@@ -212,6 +224,22 @@ int RunReplay(const ReplayArgs& args) {
         std::cerr << line.str() << "\n";
       }
     }
+    if (revisit) {
+      if (const std::optional<mapper::RevisitMatch> v = revisit->AfterFrame(*mapper, bins)) {
+        std::ostringstream line;
+        line << std::fixed << std::setprecision(3) << "replay: revisit, frames "
+             << v->match.first_frame << "-" << v->match.last_frame << " onto frame "
+             << v->from_frame << ": ";
+        if (v->match.matched) {
+          line << "matched on frame " << v->match.frame << ", RMS " << v->match.rms_before_m
+               << " -> " << v->match.rms_after_m << " m, sigma x/y " << v->match.sigma_x_m << "/"
+               << v->match.sigma_y_m << " m";
+        } else {
+          line << "refused: " << v->match.reason;
+        }
+        std::cerr << line.str() << "\n";
+      }
+    }
   }
   progress.Done();
 
@@ -221,6 +249,7 @@ int RunReplay(const ReplayArgs& args) {
   try {
     graph = mapper::SolveGraph(mapper->results(), source->info().sensor_type, source->gnss(),
                                track ? track->matches() : std::vector<mapper::ReferenceMatch>{},
+                               revisit ? revisit->matches() : std::vector<mapper::RevisitMatch>{},
                                mapper->georeference(), cfg.graph, cfg.mapper);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
@@ -230,7 +259,8 @@ int RunReplay(const ReplayArgs& args) {
     if (!graph) graph.emplace();
     graph->reference_unusable = reference_unusable;
   }
-  if (graph && (graph->fixes > 0 || !graph->reference_matches.empty())) {
+  if (graph &&
+      (graph->fixes > 0 || !graph->reference_matches.empty() || !graph->revisits.empty())) {
     const graph::PoseGraphResult& g = graph->solution;
     std::size_t refused = 0;
     for (const long f : graph->reference_factor) refused += f < 0 ? 1 : 0;
@@ -238,7 +268,8 @@ int RunReplay(const ReplayArgs& args) {
               << " GNSS fixes used (" << g.fixes_rejected << " rejected, " << graph->unmatched
               << " without a frame), " << g.poses_used << " of " << graph->reference_matches.size()
               << " reference matches used (" << g.poses_rejected << " rejected, " << refused
-              << " refused), " << std::fixed << std::setprecision(0) << g.solve_ms << " ms"
+              << " refused), " << g.loops_used << " of " << graph->revisits.size()
+              << " revisits used, " << std::fixed << std::setprecision(0) << g.solve_ms << " ms"
               << (g.solved ? "" : "; kept the frame-to-frame trajectory: " + g.message) << "\n";
     if (g.solved) {
       graph->frames_refused = mapper::RefuseFrames(

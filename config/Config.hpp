@@ -50,6 +50,7 @@ struct Config {
   mapper::ServeOptions serve;
   mapper::GraphOptions graph;
   mapper::ReferenceOptions reference;
+  mapper::RevisitOptions revisit;
   BagConfig bag;
   mosaic::MosaicOptions mosaic;
   campaign::CampaignOptions campaign;

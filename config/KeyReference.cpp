@@ -48,6 +48,10 @@ const std::map<std::string, std::string>& SectionLeads() {
        "The pose graph `replay` solves when the sequence has GNSS fixes (gnss.csv): how a fix is "
        "matched to a frame, where the antenna sits, and when a fix is rejected "
        "([graph.md](graph.md))."},
+      {"revisit",
+       "Revisits in `replay`: the recent ground matched onto the rover's own earlier ground, a "
+       "loop factor for the pose graph (the match's checks are `reference.`'s; "
+       "[graph.md](graph.md#revisits))."},
       {"reference",
        "Matches of the rover's DEM against a reference DEM (`replay --reference-dem FILE`): how "
        "often and over how much path, the reference's σ, the search, and when a match is refused "

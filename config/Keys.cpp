@@ -445,6 +445,23 @@ std::vector<KeyEntry> BuildRegistry() {
   rf.Int("min_posts", &RF::min_posts, "count", AtLeast(10),
          "fewer of the rover's posts over the reference: no match");
 
+  using RV = mapper::RevisitOptions;
+  SectionKeys<RV> rv(keys, "revisit", &Config::revisit);
+  rv.Bool("enabled", &RV::enabled,
+          "replay: match the recent ground onto the rover's own earlier ground (loop factors)");
+  rv.Double("every_m", &RV::every_m, "m", GreaterThan(0),
+            "path between two looks (each saves the recent ground for later ones)");
+  rv.Double("window_m", &RV::window_m, "m", GreaterThan(0),
+            "the recent path whose ground is matched");
+  rv.Double("post_m", &RV::post_m, "m", GreaterThan(0), "post spacing of the ground matched");
+  rv.Double("min_gap_m", &RV::min_gap_m, "m", GreaterThan(0),
+            "path between the two passes, at least");
+  rv.Double("search_m", &RV::search_m, "m", AtLeast(0),
+            "horizontal search about the chain's placement");
+  rv.Double("search_yaw_deg", &RV::search_yaw_deg, "deg", AtLeast(0), "heading search about it");
+  rv.Double("min_overlap", &RV::min_overlap, "fraction", Bounds{0, true, 1, false},
+            "of the recent posts over the earlier ground, at least");
+
   using V = mapper::ServeOptions;
   SectionKeys<V> serve(keys, "serve", &Config::serve);
   serve.Bool("use_inotify", &V::use_inotify, "watch the inbox with inotify (else poll)");

@@ -191,6 +191,17 @@ double PoseChi2(const PoseFactor& f, const Matrix6d& L, const Eigen::Isometry3d&
   return (L * e).squaredNorm();
 }
 
+// A loop's whitened squared residual: the left error of T_i⁻¹ T_j against the measured
+// increment, as RelativeCost computes it.
+double LoopChi2(const LoopFactor& f, const Matrix6d& L, const Eigen::Isometry3d& Ti,
+                const Eigen::Isometry3d& Tj) {
+  const Eigen::Isometry3d D = (Ti.inverse() * Tj) * f.T_from_to.inverse();
+  const Eigen::AngleAxisd aa(D.linear());
+  Eigen::Matrix<double, 6, 1> e;
+  e << aa.angle() * aa.axis(), D.translation();
+  return (L * e).squaredNorm();
+}
+
 // χ² at 99.9 % for 1..6 degrees of freedom; the gate of `dof` at the probability that
 // `gate_3` (a fix's gate) has for 3.
 double GateFor(int dof, double gate_3) {
@@ -232,7 +243,8 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                const std::vector<RelativeFactor>& relative,
                                const std::vector<PositionFactor>& positions,
                                const std::vector<PoseFactor>& poses,
-                               const PoseGraphOptions& options) {
+                               const PoseGraphOptions& options,
+                               const std::vector<LoopFactor>& loops) {
   Validate(options);
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n = initial.size();
@@ -254,6 +266,16 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       throw std::invalid_argument(what + ": position is not finite");
     CheckCovariance<3>(f.covariance, what);
   }
+  for (std::size_t k = 0; k < loops.size(); ++k) {
+    const LoopFactor& f = loops[k];
+    const std::string what = "loop factor " + std::to_string(k);
+    if (f.from >= n || f.to >= n || f.from == f.to)
+      throw std::invalid_argument(what + ": nodes " + std::to_string(f.from) + ", " +
+                                  std::to_string(f.to) + " of " + std::to_string(n));
+    if (!f.T_from_to.matrix().allFinite())
+      throw std::invalid_argument(what + ": increment is not finite");
+    CheckCovariance<6>(f.information, what + " information");
+  }
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const PoseFactor& f = poses[k];
     const std::string what = "pose factor " + std::to_string(k);
@@ -271,9 +293,11 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   result.fix_chi2.assign(positions.size(), 0.0);
   result.pose_used.assign(poses.size(), false);
   result.pose_chi2.assign(poses.size(), 0.0);
+  result.loop_used.assign(loops.size(), false);
+  result.loop_chi2.assign(loops.size(), 0.0);
   const bool any_gated =
       std::any_of(poses.begin(), poses.end(), [](const PoseFactor& f) { return f.gated; });
-  if ((positions.empty() && !any_gated) || n == 0) {
+  if ((positions.empty() && !any_gated && loops.empty()) || n == 0) {
     result.message = "no absolute factor: the chained trajectory is kept";
     return result;
   }
@@ -294,12 +318,20 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     pose_L[k] = SqrtOfInformation(poses[k].information, &rank);
     pose_gate[k] = GateFor(rank, options.fix_gate_chi2);
   }
+  std::vector<Matrix6d> loop_L(loops.size());
+  std::vector<double> loop_gate(loops.size());
+  for (std::size_t k = 0; k < loops.size(); ++k) {
+    int rank = 0;
+    loop_L[k] = SqrtOfInformation(loops[k].information, &rank);
+    loop_gate[k] = GateFor(rank, options.fix_gate_chi2);
+  }
   Matrix6d prior_L = Matrix6d::Zero();
   prior_L.diagonal() << Eigen::Vector3d::Constant(1.0 / (options.first_pose_sigma_deg * kDegToRad)),
       Eigen::Vector3d::Constant(1.0 / options.first_pose_sigma_m);
 
   std::vector<bool> use(positions.size(), true);
   std::vector<bool> use_pose(poses.size(), true);
+  std::vector<bool> use_loop(loops.size(), true);
   double z_offset = 0.0;  // warm-started like the nodes
   std::vector<Node> nodes;
   for (int round = 0; round < options.max_gate_rounds; ++round) {
@@ -353,6 +385,17 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       }
       if (f.gated) ++used;
     }
+    for (std::size_t k = 0; k < loops.size(); ++k) {
+      if (!use_loop[k]) continue;
+      const LoopFactor& f = loops[k];
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(
+              new RelativeCost{{Eigen::Quaterniond(f.T_from_to.linear()).normalized(),
+                                f.T_from_to.translation(), loop_L[k]}}),
+          new ceres::HuberLoss(options.fix_huber_sigmas), nodes[f.from].q, nodes[f.from].t,
+          nodes[f.to].q, nodes[f.to].t);
+      ++used;
+    }
     if (used < static_cast<std::size_t>(options.min_fixes)) {
       result.message = std::to_string(used) + " absolute factor" + (used == 1 ? "" : "s") +
                        " left after the gate, fewer than " + std::to_string(options.min_fixes) +
@@ -405,6 +448,18 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       if (use_pose[k] && poses[k].gated)
         worst = std::max(worst, result.pose_chi2[k] / pose_gate[k]);
     }
+    for (std::size_t k = 0; k < loops.size(); ++k) {
+      result.loop_chi2[k] = LoopChi2(loops[k], loop_L[k], result.T_world_body[loops[k].from],
+                                     result.T_world_body[loops[k].to]);
+      if (use_loop[k]) worst = std::max(worst, result.loop_chi2[k] / loop_gate[k]);
+    }
+    for (std::size_t k = 0; k < loops.size(); ++k) {
+      const double ratio = result.loop_chi2[k] / loop_gate[k];
+      if (!last_round && use_loop[k] && ratio > 1.0 && ratio >= 0.25 * worst) {
+        use_loop[k] = false;
+        changed = true;
+      }
+    }
     for (std::size_t k = 0; k < positions.size(); ++k) {
       const double ratio = result.fix_chi2[k] / options.fix_gate_chi2;
       if (!last_round && use[k] && ratio > 1.0 && ratio >= 0.25 * worst) {
@@ -428,6 +483,12 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   }
   result.fixes_rejected = positions.size() - result.fixes_used;
   result.z_offset_m = result.solved ? z_offset : 0.0;
+  result.loops_used = 0;
+  for (std::size_t k = 0; k < loops.size(); ++k) {
+    result.loop_used[k] = result.solved && use_loop[k];
+    if (result.loop_used[k]) ++result.loops_used;
+  }
+  result.loops_rejected = loops.size() - result.loops_used;
   result.poses_used = 0;
   result.poses_rejected = 0;
   for (std::size_t k = 0; k < poses.size(); ++k) {

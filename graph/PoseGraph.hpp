@@ -80,6 +80,17 @@ struct PoseFactor {
   bool z_offset = false;
 };
 
+/// A revisit (loop closure): T_from_to measured by matching the ground of `to` onto the ground
+/// `from` mapped earlier, weighed by `information` (positive semi-definite, a left perturbation
+/// in frame `from` as RelativeFactor's covariance; zero in the directions the match does not
+/// hold). Robust and gated as the absolute factors are.
+struct LoopFactor {
+  std::size_t from = 0;
+  std::size_t to = 0;
+  Eigen::Isometry3d T_from_to = Eigen::Isometry3d::Identity();
+  Matrix6d information = Matrix6d::Zero();
+};
+
 /// What SolvePoseGraph did.
 struct PoseGraphResult {
   /// The graph was solved: there was at least one position factor and Ceres returned a usable
@@ -96,6 +107,11 @@ struct PoseGraphResult {
   std::vector<double> pose_chi2;
   std::size_t poses_used = 0;
   std::size_t poses_rejected = 0;
+  /// The same per loop factor.
+  std::vector<bool> loop_used;
+  std::vector<double> loop_chi2;
+  std::size_t loops_used = 0;
+  std::size_t loops_rejected = 0;
   /// [m] how far above the nodes' vertical datum the PoseFactor::z_offset factors' is (0
   /// without them).
   double z_offset_m = 0.0;
@@ -111,9 +127,9 @@ struct PoseGraphResult {
 /// absolute ones) with a Huber loss, then rounds of gating (an absolute factor over the gate at
 /// the solution is left out and the rest solved again, until none is left out or the rounds
 /// end). The gate is PoseGraphOptions::fix_gate_chi2 for a fix's 3 degrees of freedom and the
-/// χ² at the same probability for a pose factor's (the rank of its information). Fewer than
-/// PoseGraphOptions::min_fixes absolute factors left, or none given: nothing is solved and the
-/// initial trajectory is returned as it is.
+/// χ² at the same probability for a pose or loop factor's (the rank of its information). Fewer
+/// than PoseGraphOptions::min_fixes absolute and loop factors left, or none given: nothing is
+/// solved and the initial trajectory is returned as it is.
 /// @throw std::invalid_argument if a factor names a node that does not exist, a covariance or
 ///        information is not finite or not symmetric positive semi-definite, or the options are
 ///        invalid.
@@ -121,7 +137,8 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
                                const std::vector<RelativeFactor>& relative,
                                const std::vector<PositionFactor>& positions,
                                const std::vector<PoseFactor>& poses,
-                               const PoseGraphOptions& options = {});
+                               const PoseGraphOptions& options = {},
+                               const std::vector<LoopFactor>& loops = {});
 
 /// The same without pose factors.
 PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,

@@ -52,6 +52,7 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
 std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                        io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
                                        const std::vector<ReferenceMatch>& matches,
+                                       const std::vector<RevisitMatch>& revisits,
                                        const io::Georeference& georeference,
                                        const GraphOptions& options,
                                        const MapperOptions& mapper_options) {
@@ -59,7 +60,8 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   // match is (it holds heading as well as position).
   const bool enough_fixes =
       fixes.size() >= static_cast<std::size_t>(std::max(options.min_gnss_fixes, 1));
-  if (!options.enabled || results.empty() || (!enough_fixes && matches.empty())) {
+  if (!options.enabled || results.empty() ||
+      (!enough_fixes && matches.empty() && revisits.empty())) {
     return std::nullopt;
   }
   std::vector<graph::PoseFactor> poses;
@@ -78,11 +80,19 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
     f.z_offset = !m.vertical_absolute;
     poses.push_back(f);
   }
+  std::vector<graph::LoopFactor> loops;
+  out.revisits = revisits;
+  for (const RevisitMatch& r : revisits) {
+    const bool usable = r.match.matched && r.factor.from < results.size() &&
+                        r.factor.to < results.size() && r.factor.from != r.factor.to;
+    out.revisit_factor.push_back(usable ? static_cast<long>(loops.size()) : -1);
+    if (usable) loops.push_back(r.factor);
+  }
   graph::PoseGraphOptions solver;
   solver.fix_gate_chi2 = options.fix_gate_chi2;
   solver.fix_huber_sigmas = options.fix_huber_sigmas;
   solver.max_gate_rounds = options.max_gate_rounds;
-  solver.min_fixes = poses.empty() ? options.min_gnss_fixes : 1;
+  solver.min_fixes = poses.empty() && loops.empty() ? options.min_gnss_fixes : 1;
   graph::Validate(solver);
 
   out.fixes = fixes.size();
@@ -136,7 +146,7 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   }
   out.solution = graph::SolvePoseGraph(
       initial, RelativeFactors(results, sensor, mapper_options),
-      enough_fixes ? positions : std::vector<graph::PositionFactor>{}, poses, solver);
+      enough_fixes ? positions : std::vector<graph::PositionFactor>{}, poses, solver, loops);
   if (!enough_fixes) {  // too few to weigh: left out, not rejected
     for (std::vector<std::size_t>& f : out.frame_fixes) f.clear();
   }
@@ -154,6 +164,23 @@ FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame) {
     }
     const auto f = static_cast<std::size_t>(factor);
     if (f < graph.solution.pose_used.size() && graph.solution.pose_used[f])
+      return FrameReference::kUsed;
+    out = FrameReference::kRejected;
+  }
+  return out;
+}
+
+FrameReference RevisitOfFrame(const GraphOutcome& graph, std::size_t frame) {
+  FrameReference out = FrameReference::kNone;
+  for (std::size_t k = 0; k < graph.revisits.size(); ++k) {
+    if (graph.revisits[k].match.frame != frame) continue;
+    const long factor = k < graph.revisit_factor.size() ? graph.revisit_factor[k] : -1;
+    if (factor < 0) {
+      if (out == FrameReference::kNone) out = FrameReference::kRefused;
+      continue;
+    }
+    const auto f = static_cast<std::size_t>(factor);
+    if (f < graph.solution.loop_used.size() && graph.solution.loop_used[f])
       return FrameReference::kUsed;
     out = FrameReference::kRejected;
   }

@@ -16,6 +16,7 @@
 #include "mapper/GraphOptions.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReferenceMatch.hpp"
+#include "mapper/Revisit.hpp"
 
 namespace rovermap::mapper {
 
@@ -33,6 +34,10 @@ struct GraphOutcome {
   std::vector<long> reference_factor;
   /// A reference DEM was given but could not be used at all: why (else empty).
   std::string reference_unusable;
+  /// Every look that found earlier ground (RevisitTrack), refused ones too, in order.
+  std::vector<RevisitMatch> revisits;
+  /// Per entry of revisits: its index into solution.loop_used, or −1 if refused.
+  std::vector<long> revisit_factor;
 };
 
 /// What became of frame `frame`'s GNSS fixes: kUsed if the solved graph used one of them,
@@ -47,6 +52,9 @@ enum class FrameReference { kNone, kUsed, kRejected, kRefused };
 FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame);
 const char* ToString(FrameReference outcome);
 
+/// The same for a revisit whose later frame is `frame`. Never throws.
+FrameReference RevisitOfFrame(const GraphOutcome& graph, std::size_t frame);
+
 /// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
 /// registration's covariance plus the per-step σ of the stereo rig's systematic error
 /// (mapper.stereo_systematic_*; a white-noise stand-in for an error the graph does not model
@@ -58,13 +66,16 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
 
 /// Solves the graph of `results` with `fixes` (geodetic, placed in the world frame by
 /// `georeference`) and the accepted `matches` against a reference DEM (pose factors; the
-/// refused ones are kept in the outcome for the report). nullopt when the graph is off, or
-/// there are fewer fixes than GraphOptions::min_gnss_fixes (a bag's single origin fix is no
-/// track) and no match at all. A reference match holds position and heading: one is enough.
+/// refused ones are kept in the outcome for the report), and the accepted `revisits` (loop
+/// factors). nullopt when the graph is off, or there are fewer fixes than
+/// GraphOptions::min_gnss_fixes (a bag's single origin fix is no track) and no match or
+/// revisit at all. A reference match holds position and heading, a revisit the two passes
+/// together: one is enough.
 /// @throw std::invalid_argument if the options are invalid.
 std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                        io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
                                        const std::vector<ReferenceMatch>& matches,
+                                       const std::vector<RevisitMatch>& revisits,
                                        const io::Georeference& georeference,
                                        const GraphOptions& options,
                                        const MapperOptions& mapper_options);

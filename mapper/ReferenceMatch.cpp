@@ -198,6 +198,56 @@ ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::Referenc
                               std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
                               const Eigen::Isometry3d& seed, const ReferenceOptions& options,
                               const registration::RegistrationOptions& registration) {
+  Eigen::AlignedBox2d box;
+  for (const Post& post : posts) box.extend(post.p.head<2>());
+  io::ReferenceGrid grid;
+  if (!box.isEmpty()) {
+    const double margin = options.search_m + 3.0 * reference.post_spacing_m() +
+                          box.diagonal().norm() * std::sin(options.search_yaw_deg / kRadToDeg);
+    // The patch in the frame the seed places it in: the box moved by the seed, widened.
+    Eigen::AlignedBox2d placed;
+    for (int corner = 0; corner < 4; ++corner) {
+      const Eigen::Vector2d c = box.corner(static_cast<Eigen::AlignedBox2d::CornerType>(corner));
+      placed.extend((seed * Eigen::Vector3d(c.x(), c.y(), 0.0)).head<2>());
+    }
+    const Eigen::Vector2d pad = Eigen::Vector2d::Constant(margin);
+    grid = reference.Resample(placed.min() - pad, placed.max() + pad);
+  }
+  return MatchPosts(posts, grid, first_frame, poses, seed, options, registration,
+                    "no reference height under the window (outside the reference DEM)");
+}
+
+io::ReferenceGrid GridOfPosts(const std::vector<Post>& posts, double spacing_m, double sigma_m) {
+  io::ReferenceGrid grid;
+  grid.spacing_m = spacing_m;
+  Eigen::AlignedBox2d box;
+  for (const Post& post : posts) box.extend(post.p.head<2>());
+  if (box.isEmpty() || !(spacing_m > 0.0)) return grid;
+  grid.origin_world = (box.min() / spacing_m).array().round().matrix() * spacing_m;
+  grid.width =
+      static_cast<int>(std::lround((box.max().x() - grid.origin_world.x()) / spacing_m)) + 1;
+  grid.height =
+      static_cast<int>(std::lround((box.max().y() - grid.origin_world.y()) / spacing_m)) + 1;
+  const auto n = static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height);
+  grid.z_m.assign(n, std::numeric_limits<float>::quiet_NaN());
+  grid.sigma_m.assign(n, std::numeric_limits<float>::quiet_NaN());
+  for (const Post& post : posts) {
+    const long col = std::lround((post.p.x() - grid.origin_world.x()) / spacing_m);
+    const long row = std::lround((post.p.y() - grid.origin_world.y()) / spacing_m);
+    if (col < 0 || row < 0 || col >= grid.width || row >= grid.height) continue;
+    const std::size_t k =
+        static_cast<std::size_t>(row) * grid.width + static_cast<std::size_t>(col);
+    grid.z_m[k] = static_cast<float>(post.p.z());
+    grid.sigma_m[k] = static_cast<float>(sigma_m);
+  }
+  return grid;
+}
+
+ReferenceMatch MatchPosts(const std::vector<Post>& posts, const io::ReferenceGrid& grid,
+                          std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
+                          const Eigen::Isometry3d& seed, const ReferenceOptions& options,
+                          const registration::RegistrationOptions& registration,
+                          const std::string& no_grid) {
   const auto start = std::chrono::steady_clock::now();
   ReferenceMatch out;
   out.first_frame = first_frame;
@@ -210,22 +260,8 @@ ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::Referenc
     return out;
   };
   if (poses.empty()) return done("no frames in the window");
-
-  Eigen::AlignedBox2d box;
-  for (const Post& post : posts) box.extend(post.p.head<2>());
-  if (box.isEmpty()) return done("no points of the window's frames");
-  const double margin = options.search_m + 3.0 * reference.post_spacing_m() +
-                        box.diagonal().norm() * std::sin(options.search_yaw_deg / kRadToDeg);
-  // The patch in the frame the seed places it in: the box moved by the seed, widened.
-  Eigen::AlignedBox2d placed;
-  for (int corner = 0; corner < 4; ++corner) {
-    const Eigen::Vector2d c = box.corner(static_cast<Eigen::AlignedBox2d::CornerType>(corner));
-    placed.extend((seed * Eigen::Vector3d(c.x(), c.y(), 0.0)).head<2>());
-  }
-  const Eigen::Vector2d pad = Eigen::Vector2d::Constant(margin);
-  const io::ReferenceGrid grid = reference.Resample(placed.min() - pad, placed.max() + pad);
-  if (grid.ValidNodes() == 0)
-    return done("no reference height under the window (outside the reference DEM)");
+  if (posts.empty()) return done("no points of the window's frames");
+  if (grid.ValidNodes() == 0) return done(no_grid);
   const double s = grid.spacing_m;
   out.posts = posts.size();
 
@@ -279,7 +315,9 @@ ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::Referenc
     registration::RegistrationResult result;
   };
   std::vector<Solution> solutions;
-  const double step = 1.5 * s;
+  // Starts every 1.5 posts, or a quarter of the search where it is wide (a revisit after a long
+  // drift): at most 9 x 9 per heading.
+  const double step = std::max(1.5 * s, 0.25 * options.search_m);
   const int reach = static_cast<int>(std::floor(options.search_m / step));
   std::vector<double> yaws = {0.0};
   if (options.search_yaw_deg > 0.0) {

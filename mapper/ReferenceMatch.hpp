@@ -67,6 +67,18 @@ ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::Referenc
                               const Eigen::Isometry3d& seed, const ReferenceOptions& options,
                               const registration::RegistrationOptions& registration);
 
+/// The same onto a grid already made (a reference resampled, or the rover's own earlier ground:
+/// GridOfPosts); `no_grid` is the reason given when the grid holds no height.
+ReferenceMatch MatchPosts(const std::vector<Post>& posts, const io::ReferenceGrid& grid,
+                          std::size_t first_frame, const std::vector<Eigen::Isometry3d>& poses,
+                          const Eigen::Isometry3d& seed, const ReferenceOptions& options,
+                          const registration::RegistrationOptions& registration,
+                          const std::string& no_grid);
+
+/// `posts` as a grid of `spacing_m` (multiples of it), each node the height of the post nearest,
+/// of σ `sigma_m`; nodes without a post NaN. Never throws.
+io::ReferenceGrid GridOfPosts(const std::vector<Post>& posts, double spacing_m, double sigma_m);
+
 /// When to match during a replay: after each frame (its points binned by BinFrame before it
 /// was processed; empty bins for a frame that was not fused), AfterFrame matches once the path
 /// since the last match reaches every_m, the window being the frames of the last window_m

@@ -42,4 +42,27 @@ struct ReferenceOptions {
   int min_posts = 50;
 };
 
+/// Revisits (docs/graph.md): the rover's recent ground matched onto its own earlier ground, a
+/// loop factor for the graph; the `revisit.` keys. The match's checks (relief, ambiguity, σ,
+/// posts, covariance scale) are reference.*'s.
+struct RevisitOptions {
+  /// Look for revisits in replay.
+  bool enabled = true;
+  /// [m] path between two looks (each saves the window's ground for later ones too); > 0.
+  double every_m = 20.0;
+  /// [m] the recent path whose ground is matched; > 0.
+  double window_m = 40.0;
+  /// [m] post spacing of the ground matched; > 0.
+  double post_m = 0.5;
+  /// [m] path between the two passes, at least: nearer ground is the frame-to-frame chain's; > 0.
+  double min_gap_m = 100.0;
+  /// [m] horizontal search about the chain's placement (the chain drifts between the passes);
+  /// >= 0.
+  double search_m = 6.0;
+  /// [deg] heading search about it; >= 0.
+  double search_yaw_deg = 3.0;
+  /// [fraction] of the recent posts over the earlier ground, at least; in (0, 1].
+  double min_overlap = 0.3;
+};
+
 }  // namespace rovermap::mapper

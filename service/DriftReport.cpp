@@ -89,7 +89,7 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
        "matcher_status,conditioning,points,outliers_removed,detail,"
        "sigma_x_m,sigma_y_m,sigma_z_m,sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg,image_check,"
        "graph_dx_m,graph_dy_m,graph_dz_m,graph_droll_deg,graph_dpitch_deg,graph_dyaw_deg,gnss,"
-       "reference\n";
+       "reference,revisit\n";
   s << std::setprecision(9);
   for (const FrameResult& r : results) {
     s << r.index << ',' << std::fixed << std::setprecision(6) << r.timestamp << std::defaultfloat
@@ -116,6 +116,7 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
                                          : "none")
       << ','
       << ToString(graph != nullptr ? ReferenceOfFrame(*graph, r.index) : FrameReference::kNone)
+      << ',' << ToString(graph != nullptr ? RevisitOfFrame(*graph, r.index) : FrameReference::kNone)
       << '\n';
   }
   return s.str();
@@ -212,32 +213,52 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
   return summary;
 }
 
+namespace {
+
+// One match's figures, with what became of it: refused (its own checks), used or rejected (the
+// graph's gate).
+nlohmann::json MatchJson(const ReferenceMatch& m, const char* status) {
+  return {{"frame", m.frame},
+          {"first_frame", m.first_frame},
+          {"last_frame", m.last_frame},
+          {"status", status},
+          {"reason", m.reason},
+          {"posts", m.posts},
+          {"rms_before_m", Number(m.rms_before_m)},
+          {"rms_after_m", Number(m.rms_after_m)},
+          {"sigma_x_m", Number(m.sigma_x_m)},
+          {"sigma_y_m", Number(m.sigma_y_m)},
+          {"sigma_yaw_deg", Number(m.sigma_yaw_deg)},
+          {"relief_ratio", Number(m.relief_ratio)},
+          {"starts", m.starts},
+          {"ms", m.ms}};
+}
+
+const char* StatusOf(long factor, const std::vector<bool>& used) {
+  if (factor < 0) return "refused";
+  const auto f = static_cast<std::size_t>(factor);
+  return f < used.size() && used[f] ? "used" : "rejected";
+}
+
+}  // namespace
+
 nlohmann::json GraphJson(const GraphOutcome& graph) {
   const graph::PoseGraphResult& s = graph.solution;
   nlohmann::json matches = nlohmann::json::array();
   std::size_t refused = 0;
   for (std::size_t k = 0; k < graph.reference_matches.size(); ++k) {
-    const ReferenceMatch& m = graph.reference_matches[k];
     const long f = k < graph.reference_factor.size() ? graph.reference_factor[k] : -1;
-    const bool used = f >= 0 && static_cast<std::size_t>(f) < s.pose_used.size() &&
-                      s.pose_used[static_cast<std::size_t>(f)];
     refused += f < 0 ? 1 : 0;
-    matches.push_back({{"frame", m.frame},
-                       {"first_frame", m.first_frame},
-                       {"last_frame", m.last_frame},
-                       {"status", f < 0  ? "refused"
-                                  : used ? "used"
-                                         : "rejected"},
-                       {"reason", m.reason},
-                       {"posts", m.posts},
-                       {"rms_before_m", Number(m.rms_before_m)},
-                       {"rms_after_m", Number(m.rms_after_m)},
-                       {"sigma_x_m", Number(m.sigma_x_m)},
-                       {"sigma_y_m", Number(m.sigma_y_m)},
-                       {"sigma_yaw_deg", Number(m.sigma_yaw_deg)},
-                       {"relief_ratio", Number(m.relief_ratio)},
-                       {"starts", m.starts},
-                       {"ms", m.ms}});
+    matches.push_back(MatchJson(graph.reference_matches[k], StatusOf(f, s.pose_used)));
+  }
+  nlohmann::json revisits = nlohmann::json::array();
+  std::size_t revisits_refused = 0;
+  for (std::size_t k = 0; k < graph.revisits.size(); ++k) {
+    const long f = k < graph.revisit_factor.size() ? graph.revisit_factor[k] : -1;
+    revisits_refused += f < 0 ? 1 : 0;
+    nlohmann::json j = MatchJson(graph.revisits[k].match, StatusOf(f, s.loop_used));
+    j["earlier_frame"] = graph.revisits[k].from_frame;
+    revisits.push_back(j);
   }
   return {{"solved", s.solved},
           {"reference_matches", graph.reference_matches.size()},
@@ -247,6 +268,11 @@ nlohmann::json GraphJson(const GraphOutcome& graph) {
           {"reference_unusable", graph.reference_unusable},
           {"reference_vertical_offset_m", s.z_offset_m},
           {"reference", matches},
+          {"revisits", graph.revisits.size()},
+          {"revisits_used", s.loops_used},
+          {"revisits_rejected", s.loops_rejected},
+          {"revisits_refused", revisits_refused},
+          {"revisit", revisits},
           {"gnss_fixes", graph.fixes},
           {"gnss_unmatched", graph.unmatched},
           {"gnss_used", s.fixes_used},
@@ -324,8 +350,10 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
         graph_solved && chained && chained->registered.status == eval::MetricStatus::kOk;
     const bool gnss_ticks = graph != nullptr && graph->fixes > 0;
     const bool reference_ticks = graph != nullptr && !graph->reference_matches.empty();
+    const bool revisit_ticks = graph != nullptr && !graph->revisits.empty();
     const std::size_t legend_lines = 2 + (with_sigma ? 1 : 0) + (chained_ok ? 1 : 0) +
-                                     (gnss_ticks ? 2 : 0) + (reference_ticks ? 2 : 0);
+                                     (gnss_ticks ? 2 : 0) + (reference_ticks ? 2 : 0) +
+                                     (revisit_ticks ? 1 : 0);
     const double y1 = std::max({peak(reg.ate_origin_error_m), peak(odo.ate_origin_error_m),
                                 with_sigma ? peak(two_sigma) : 0.0,
                                 chained_ok ? peak(chained->registered.ate_origin_error_m) : 0.0}) *
@@ -374,6 +402,17 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
       }
       legend.emplace_back("reference DEM match used (tall tick)", used);
       legend.emplace_back("reference DEM match refused or rejected (tall tick)", refused);
+    }
+    // Where the rover matched its own earlier ground: a tallest tick, used or not.
+    if (revisit_ticks && reg.distance_m.size() == results.size()) {
+      const cv::Scalar colour(30, 30, 30);
+      for (std::size_t k = 0; k < results.size(); ++k) {
+        const FrameReference rv = RevisitOfFrame(*graph, k);
+        if (rv == FrameReference::kNone) continue;
+        const cv::Point p = axes.Map(reg.distance_m[k], axes.y0);
+        cv::line(img, p, p - cv::Point(0, 30), colour, rv == FrameReference::kUsed ? 3 : 1);
+      }
+      legend.emplace_back("revisit: used (thick) or refused (thin), tallest tick", colour);
     }
   } else {
     std::vector<double> distance, correction;

@@ -315,3 +315,31 @@ TEST(PoseGraph, AWrongMatchIsRejectedAndPriorsAreNeitherGatedNorCounted) {
   EXPECT_FALSE(alone.solved);
   EXPECT_EQ(alone.poses_used + alone.poses_rejected, 0u);
 }
+
+// A revisit: the last node measured against the first (the arc's ends, 100 m apart along it,
+// seen as one place). The loop pulls the chain's end back; a loop wrong by 40 m, alone,
+// is rejected and the chain kept.
+TEST(PoseGraph, ALoopFactorPullsTheChainsEndAndAWrongOneIsRejected) {
+  const Traverse t = MakeTraverse();
+  graph::LoopFactor loop;
+  loop.from = 0;
+  loop.to = t.truth.size() - 1;
+  loop.T_from_to = t.truth.front().inverse() * t.truth.back();
+  loop.information = Diagonal(0.1 * M_PI / 180.0, 0.05).inverse();
+  const double chained_end = (t.chained.back().translation() - t.truth.back().translation()).norm();
+  ASSERT_GT(chained_end, 2.0);
+  graph::PoseGraphOptions one;  // as the pipeline asks with revisits: one loop is enough
+  one.min_fixes = 1;
+  const graph::PoseGraphResult r =
+      graph::SolvePoseGraph(t.chained, t.relative, {}, {}, one, {loop});
+  ASSERT_TRUE(r.solved) << r.message;
+  EXPECT_EQ(r.loops_used, 1u);
+  const double end = (r.T_world_body.back().translation() - t.truth.back().translation()).norm();
+  EXPECT_LT(end, 0.2 * chained_end) << end;
+  graph::LoopFactor wrong = loop;
+  wrong.T_from_to.translation().x() += 40.0;  // far beyond what the chain can drift
+  const graph::PoseGraphResult w =
+      graph::SolvePoseGraph(t.chained, t.relative, {}, {}, one, {wrong});
+  EXPECT_FALSE(w.solved);
+  EXPECT_EQ(w.loops_rejected, 1u);
+}

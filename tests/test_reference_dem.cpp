@@ -19,6 +19,7 @@
 #include "io/ReferenceDem.hpp"
 #include "mapper/Patches.hpp"
 #include "mapper/ReferenceMatch.hpp"
+#include "mapper/Revisit.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
@@ -332,4 +333,34 @@ TEST(Patches, FramesArePlacedByTheirPosesAndMergedAtThePostSpacing) {
   }
   acc.DropBefore(1);
   for (const mapper::Post& p : acc.Window(0, 1, 1.0)) EXPECT_GE(p.p.x(), 13.9);
+}
+
+// LoopInformation: a pose factor's information at frame `to` (world axes, about its position)
+// as a left perturbation δ of T_from_to in frame `from`: e = A δ for small δ, checked by finite
+// differences against T_to' = T_from · Exp(δ) · T_from_to.
+TEST(Revisit, LoopInformationIsThePoseInformationMovedToTheFromFrame) {
+  Eigen::Isometry3d T_from = Eigen::Isometry3d::Identity();
+  T_from.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()).matrix();
+  T_from.translation() = Eigen::Vector3d(12.0, -3.0, 0.5);
+  Eigen::Isometry3d T_ft = Eigen::Isometry3d::Identity();
+  T_ft.linear() = Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitZ()).matrix();
+  T_ft.translation() = Eigen::Vector3d(8.0, 5.0, -0.3);
+  const Eigen::Isometry3d T_to = T_from * T_ft;
+  graph::Matrix6d info = graph::Matrix6d::Zero();
+  info.diagonal() << 0.0, 0.0, 1e4, 100.0, 200.0, 400.0;
+  const graph::Matrix6d L = mapper::LoopInformation(info, T_from, T_ft);
+  std::mt19937 rng(2);
+  std::normal_distribution<double> n(0.0, 1e-4);
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::Matrix<double, 6, 1> d;
+    for (int i = 0; i < 6; ++i) d(i) = n(rng);
+    Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+    D.linear() = Eigen::AngleAxisd(d.head<3>().norm(), d.head<3>().normalized()).matrix();
+    D.translation() = d.tail<3>();
+    const Eigen::Isometry3d T2 = T_from * D * T_ft;
+    Eigen::Matrix<double, 6, 1> e;
+    const Eigen::AngleAxisd aa(T2.linear() * T_to.linear().transpose());
+    e << aa.angle() * aa.axis(), T2.translation() - T_to.translation();
+    EXPECT_NEAR(d.dot(L * d), e.dot(info * e), 1e-3 * e.dot(info * e) + 1e-12) << trial;
+  }
 }
