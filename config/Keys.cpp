@@ -37,7 +37,8 @@ const EnumNames<stereo::Algorithm> kStereoAlgorithmNames = {
     {"bm", stereo::Algorithm::kBm}};
 const EnumNames<sim::PathShape> kPathShapeNames = {{"straight", sim::PathShape::kStraight},
                                                    {"curves", sim::PathShape::kCurves},
-                                                   {"loop", sim::PathShape::kLoop}};
+                                                   {"loop", sim::PathShape::kLoop},
+                                                   {"out_and_back", sim::PathShape::kOutAndBack}};
 const EnumNames<mapper::Reference> kReferenceNames = {{"previous", mapper::Reference::kPrevious},
                                                       {"local_map", mapper::Reference::kLocalMap}};
 const EnumNames<io::SensorType> kBagSensorNames = {{"stereo", io::SensorType::kStereo},

@@ -5,7 +5,7 @@
 
 namespace rovermap::sim {
 
-enum class PathShape { kStraight, kCurves, kLoop };
+enum class PathShape { kStraight, kCurves, kLoop, kOutAndBack };
 enum class SensorKind { kStereo, kCloud };
 
 struct SimOptions {
@@ -35,7 +35,9 @@ struct SimOptions {
 
   // Rover and path.
   PathShape path = PathShape::kCurves;
-  double turn_radius_m = 6.0;  ///< loop radius / tightest curve radius
+  /// [m] loop radius / tightest curve radius / the out-and-back's U-turn radius (the return leg
+  /// runs 2 × this beside the outbound one)
+  double turn_radius_m = 6.0;
   // Start pose in the terrain's frame: the path is driven from it. The terrain (relief,
   // craters, rocks) does not depend on it, so traverses from other start poses see one ground.
   double start_x_m = 0.0;      ///< start position east of the terrain's centre [m]

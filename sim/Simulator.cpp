@@ -57,7 +57,10 @@ const SimOptions& Validated(const SimOptions& o) {
 
 Simulator::Path Simulator::MakePath(const SimOptions& o) {
   // Heading as a function of arc length s: straight 0; curves (λ/R)·sin(s/λ) with λ = R/2
-  // (curvature never above 1/R); loop s/R.
+  // (curvature never above 1/R); loop s/R; out and back: straight, a U-turn of radius R
+  // halfway, straight back 2R beside the way out.
+  const double length = o.frames * o.speed_m_s / o.frame_rate_hz;
+  const double turn_start = 0.5 * (length - M_PI * o.turn_radius_m);
   auto heading = [&](double s) {
     switch (o.path) {
       case PathShape::kStraight:
@@ -68,6 +71,8 @@ Simulator::Path Simulator::MakePath(const SimOptions& o) {
       }
       case PathShape::kLoop:
         return s / o.turn_radius_m;
+      case PathShape::kOutAndBack:
+        return std::clamp((s - turn_start) / o.turn_radius_m, 0.0, M_PI);
     }
     return 0.0;
   };

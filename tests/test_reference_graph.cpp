@@ -101,6 +101,21 @@ class ReferenceGraph : public ::testing::Test {
         *dir_, "replay " + plain + " --out " + (*dir_ / "plain_revisit").string() + kMaps);
     ASSERT_EQ(revisit.status, 0) << revisit.err;
     *revisit_err_ = revisit.err;
+    // Out and back: 98 m east, a U-turn of 2 m radius, 98 m back 4 m beside the way out.
+    const std::string oab = (*dir_ / "oab").string();
+    ASSERT_EQ(RunRovermapIn(*dir_, "simulate --out " + oab +
+                                       " --set sim.sensor=cloud --set sim.frames=101"
+                                       " --set sim.frame_rate_hz=1 --set sim.speed_m_s=2"
+                                       " --set sim.terrain_size_m=240 --set sim.terrain_cell_m=0.2"
+                                       " --set sim.path=out_and_back --set sim.turn_radius_m=2"
+                                       " --set sim.start_x_m=-100 --set sim.start_y_m=-2"
+                                       " --set sim.odom_scale_error=0.05 --set dem.cell_size_m=0.2")
+                  .status,
+              0);
+    const CommandResult back =
+        RunRovermapIn(*dir_, "replay " + oab + " --out " + (*dir_ / "oab_out").string() + kMaps);
+    ASSERT_EQ(back.status, 0) << back.err;
+    *oab_err_ = back.err;
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
@@ -114,11 +129,13 @@ class ReferenceGraph : public ::testing::Test {
   void ThreeHundredMetresOnCrateredGround();
   void OnAPlainEveryMatchIsRefusedAndTheResultIsTheFrameToFrameOne();
   void TheRevisitClosesTheLoop();
+  void OutAndBackRevisitsAreRefusedNotMisused();
 
   static fs::path* dir_;
   static inline std::string* err_ = new std::string;
   static inline std::string* plain_err_ = new std::string;
   static inline std::string* revisit_err_ = new std::string;
+  static inline std::string* oab_err_ = new std::string;
 };
 fs::path* ReferenceGraph::dir_ = nullptr;
 
@@ -197,6 +214,21 @@ void ReferenceGraph::TheRevisitClosesTheLoop() {
   EXPECT_NE(revisit_err_->find("replay: revisit, frames"), std::string::npos) << *revisit_err_;
 }
 
+// Out and back (docs/graph.md, "Revisits"): the way back sees the way out's ground from the other
+// side (other slopes lit, other ones hidden) and beside its track, where the frames are sparse.
+// The looks find that ground, and the matches are refused (ill-conditioned) rather than used:
+// the result stays the chain's. A change that makes them count must show that they are right.
+void ReferenceGraph::OutAndBackRevisitsAreRefusedNotMisused() {
+  EXPECT_NE(oab_err_->find("replay: revisit, frames"), std::string::npos) << *oab_err_;
+  const nlohmann::json s = Summary("oab_out");
+  ASSERT_TRUE(s.contains("graph")) << s.dump(2);
+  const nlohmann::json& g = s["graph"];
+  EXPECT_GE(g["revisits"].get<int>(), 1);
+  EXPECT_EQ(g["revisits_used"], 0);
+  EXPECT_FALSE(g["solved"].get<bool>());
+  EXPECT_FALSE(fs::exists(*dir_ / "oab_out/trajectory_f2f.tum"));
+}
+
 TEST_F(ReferenceGraph, CrateredGroundIsHeldAndAPlainRefused) {
   {
     SCOPED_TRACE("300 m on cratered ground: ATE at most 0.3x frame to frame, bounded");
@@ -209,6 +241,10 @@ TEST_F(ReferenceGraph, CrateredGroundIsHeldAndAPlainRefused) {
   {
     SCOPED_TRACE("the revisit closes the loop");
     TheRevisitClosesTheLoop();
+  }
+  {
+    SCOPED_TRACE("out and back: the looks find the earlier ground, the matches are refused");
+    OutAndBackRevisitsAreRefusedNotMisused();
   }
 }
 
