@@ -3,7 +3,8 @@
 # absolute source (docs/graph.md) against the frame-to-frame trajectory, on simulated cloud
 # loops of each length on cratered ground (2 m a frame at 1 Hz, a 40 m turn radius, dead
 # reckoning 5 % short in scale): GNSS fixes every 10 m of σ `--sigma` with 5 % multipath jumps
-# of 10 m; a 1 m/post reference DEM of σ 0.2 m misplaced 0.5 m east, matched every 20 m; both.
+# of 10 m; a 1 m/post reference DEM of σ 0.2 m misplaced 0.5 m east, matched every 20 m; the
+# loop's revisits (laps after the first, from 300 m); all three.
 # One row per length and source: ATE (SE(3)-aligned) and final position error, the factors used
 # and rejected (refused), and the solve's time. 20 cm DEM cells (the table is about poses).
 set -euo pipefail
@@ -44,15 +45,18 @@ for L in $LENGTHS; do
     --set sim.craters=$(( size * size / 200 )) --set sim.crater_max_radius_m=10 \
     --set sim.reference_post_m=1 --set dem.cell_size_m=0.2 >/dev/null 2>&1
   common=(--set dem.cell_size_m=0.2 --set octomap.enabled=false)
+  alone=(--set revisit.enabled=false)  # one source at a time
   ref=(--reference-dem "$seq/reference_dem.tif")
   no_gnss=(--set graph.min_gnss_fixes=1000000)  # too few fixes: gnss.csv left out
   "$R" replay "$seq" --out "$W/f2f_$L" "${common[@]}" --set graph.enabled=false \
     >"$W/s_f2f_$L.json" 2>/dev/null
-  "$R" replay "$seq" --out "$W/gnss_$L" "${common[@]}" >"$W/s_gnss_$L.json" 2>/dev/null
-  "$R" replay "$seq" --out "$W/ref_$L" "${common[@]}" "${ref[@]}" "${no_gnss[@]}" \
+  "$R" replay "$seq" --out "$W/gnss_$L" "${common[@]}" "${alone[@]}" >"$W/s_gnss_$L.json" 2>/dev/null
+  "$R" replay "$seq" --out "$W/ref_$L" "${common[@]}" "${alone[@]}" "${ref[@]}" "${no_gnss[@]}" \
     >"$W/s_ref_$L.json" 2>/dev/null
-  "$R" replay "$seq" --out "$W/both_$L" "${common[@]}" "${ref[@]}" >"$W/s_both_$L.json" 2>/dev/null
-  for source in odometry f2f gnss ref both; do
+  "$R" replay "$seq" --out "$W/revisit_$L" "${common[@]}" "${no_gnss[@]}" >"$W/s_revisit_$L.json" \
+    2>/dev/null
+  "$R" replay "$seq" --out "$W/all_$L" "${common[@]}" "${ref[@]}" >"$W/s_all_$L.json" 2>/dev/null
+  for source in odometry f2f gnss ref revisit all; do
     case $source in
       odometry) out=f2f; tum="$seq/odometry.tum" ;;
       *) out=$source; tum="$W/${source}_$L/trajectory.tum" ;;
@@ -63,17 +67,19 @@ s = json.load(open(sys.argv[1]))
 L, source, final = sys.argv[2], sys.argv[3], sys.argv[4]
 m = s["metrics"]
 name = {"odometry": "dead reckoning", "f2f": "frame to frame", "gnss": "GNSS",
-        "ref": "reference DEM", "both": "GNSS + reference DEM"}[source]
+        "ref": "reference DEM", "revisit": "revisits", "all": "all three"}[source]
 ate = m["odometry" if source == "odometry" else "registered"]["ate_rmse_m"]
 g = s.get("graph")
 if source in ("odometry", "f2f") or g is None:
     used, solve = "", ""
 else:
     parts = []
-    if source in ("gnss", "both"):
+    if source in ("gnss", "all"):
         parts.append(f"{g['gnss_used']} / {g['gnss_rejected']} fixes")
-    if source in ("ref", "both"):
+    if source in ("ref", "all"):
         parts.append(f"{g['reference_used']} / {g['reference_rejected']} ({g['reference_refused']}) matches")
+    if source in ("revisit", "all"):
+        parts.append(f"{g['revisits_used']} / {g['revisits_rejected']} ({g['revisits_refused']}) revisits")
     used, solve = ", ".join(parts), f"{g['solve_ms']:.0f} ms"
 print(f"| {L} m | {name} | {ate:.3f} / {final} m | {used} | {solve} |")
 PY

@@ -9,13 +9,16 @@ namespace {
 
 constexpr double kBinM = 0.25;
 
-std::int64_t Key(std::int64_t col, std::int64_t row) { return (col << 32) ^ (row & 0xffffffff); }
+// Two signed bin indices in one key (unsigned: shifting a negative value is undefined).
+std::uint64_t Key(std::int64_t col, std::int64_t row) {
+  return (static_cast<std::uint64_t>(col) << 32) ^ (static_cast<std::uint64_t>(row) & 0xffffffffu);
+}
 
 }  // namespace
 
 FrameBins BinFrame(const registration::PointCloud& points_body,
                    const std::vector<unsigned char>& keep) {
-  std::unordered_map<std::int64_t, std::size_t> index;
+  std::unordered_map<std::uint64_t, std::size_t> index;
   FrameBins bins;
   const bool masked = keep.size() == points_body.size();
   for (std::size_t i = 0; i < points_body.size(); ++i) {
@@ -52,7 +55,7 @@ void PatchAccumulator::DropBefore(std::size_t frame) {
 
 std::vector<Post> PatchAccumulator::Window(std::size_t first, std::size_t last, double spacing_m,
                                            std::size_t min_points) const {
-  std::unordered_map<std::int64_t, std::size_t> index;
+  std::unordered_map<std::uint64_t, std::size_t> index;
   std::vector<Eigen::Vector3d> sum;
   std::vector<std::size_t> count;
   for (const Placed& f : frames_) {

@@ -333,6 +333,14 @@ TEST(Patches, FramesArePlacedByTheirPosesAndMergedAtThePostSpacing) {
   }
   acc.DropBefore(1);
   for (const mapper::Post& p : acc.Window(0, 1, 1.0)) EXPECT_GE(p.p.x(), 13.9);
+  // West and south of the origin (negative bin indices) the same frame gives as many posts.
+  mapper::PatchAccumulator west;
+  T.translation() = Eigen::Vector3d(-50.0, -30.0, 1.0);
+  west.Add(0, T, bins);
+  mapper::PatchAccumulator east;
+  T.translation() = Eigen::Vector3d(50.0, 30.0, 1.0);
+  east.Add(0, T, bins);
+  EXPECT_EQ(west.Window(0, 0, 1.0).size(), east.Window(0, 0, 1.0).size());
 }
 
 // LoopInformation: a pose factor's information at frame `to` (world axes, about its position)
