@@ -393,7 +393,8 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
     }
     // Where the reference DEM was matched: a taller tick on the frame the match holds.
     if (reference_ticks && reg.distance_m.size() == results.size()) {
-      const cv::Scalar used(200, 120, 0), refused(0, 140, 255);
+      // Teal and brown (BGR): apart from the trajectories' blue and orange.
+      const cv::Scalar used(150, 150, 0), refused(30, 80, 150);
       for (std::size_t k = 0; k < results.size(); ++k) {
         const FrameReference ref = ReferenceOfFrame(*graph, k);
         if (ref == FrameReference::kNone) continue;
