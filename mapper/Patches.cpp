@@ -49,6 +49,20 @@ void PatchAccumulator::Add(std::size_t frame, const Eigen::Isometry3d& T_world_b
   frames_.push_back(std::move(placed));
 }
 
+std::size_t PatchAccumulator::Advance(std::size_t frame, const Eigen::Isometry3d& T_world_body,
+                                      const FrameBins& bins, double window_m) {
+  const Eigen::Vector3d position = T_world_body.translation();
+  path_m_.push_back(path_m_.empty() ? 0.0 : path_m_.back() + (position - last_position_).norm());
+  last_position_ = position;
+  Add(frame, T_world_body, bins);
+  // path_m_[k] is frame (frame − (size − 1 − k))'s.
+  std::size_t first = path_m_.size() - 1;
+  while (first > 0 && path_m_.back() - path_m_[first - 1] <= window_m) --first;
+  const std::size_t first_frame = frame - (path_m_.size() - 1 - first);
+  DropBefore(first_frame);
+  return first_frame;
+}
+
 void PatchAccumulator::DropBefore(std::size_t frame) {
   while (!frames_.empty() && frames_.front().frame < frame) frames_.pop_front();
 }

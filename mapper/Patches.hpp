@@ -37,6 +37,12 @@ class PatchAccumulator {
  public:
   /// Adds frame `frame` (frames in increasing order) with its chained pose.
   void Add(std::size_t frame, const Eigen::Isometry3d& T_world_body, const FrameBins& bins);
+  /// Add for every frame of a run in turn (frame 0 first), keeping the path walked and only the
+  /// frames of its last `window_m`. @return the window's first frame.
+  std::size_t Advance(std::size_t frame, const Eigen::Isometry3d& T_world_body,
+                      const FrameBins& bins, double window_m);
+  /// [m] the chained path from frame 0 to the last frame Advance took.
+  double path_m() const { return path_m_.empty() ? 0.0 : path_m_.back(); }
   /// Forgets the frames before `frame`.
   void DropBefore(std::size_t frame);
   /// The posts of frames [first, last] on the world lattice of `spacing_m` (multiples of it),
@@ -51,6 +57,8 @@ class PatchAccumulator {
     std::vector<std::size_t> count;
   };
   std::deque<Placed> frames_;
+  std::vector<double> path_m_;  // per frame Advance took
+  Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace rovermap::mapper

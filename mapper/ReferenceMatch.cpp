@@ -498,20 +498,11 @@ std::optional<ReferenceMatch> ReferenceTrack::AfterFrame(const Mapper& mapper,
                                                          const FrameBins& bins) {
   const std::vector<FrameResult>& results = mapper.results();
   if (results.empty()) return std::nullopt;
-  while (path_m_.size() < results.size()) {
-    const std::size_t k = path_m_.size();
-    path_m_.push_back(k == 0 ? 0.0
-                             : path_m_.back() + (results[k].step.T_world_body.translation() -
-                                                 results[k - 1].step.T_world_body.translation())
-                                                    .norm());
-  }
   const std::size_t last = results.size() - 1;
-  patches_.Add(last, results[last].step.T_world_body, bins);
-  std::size_t first = last;
-  while (first > 0 && path_m_.back() - path_m_[first - 1] <= options_.window_m) --first;
-  patches_.DropBefore(first);
-  if (path_m_.back() - last_match_m_ < options_.every_m) return std::nullopt;
-  last_match_m_ = path_m_.back();
+  const std::size_t first =
+      patches_.Advance(last, results[last].step.T_world_body, bins, options_.window_m);
+  if (patches_.path_m() - last_match_m_ < options_.every_m) return std::nullopt;
+  last_match_m_ = patches_.path_m();
   std::vector<Eigen::Isometry3d> poses;
   for (std::size_t k = first; k <= last; ++k) poses.push_back(results[k].step.T_world_body);
   ReferenceMatch match = MatchReference(patches_.Window(first, last, reference_.post_spacing_m()),

@@ -95,7 +95,6 @@ class ReferenceTrack {
   const io::ReferenceDem& reference_;
   ReferenceOptions options_;
   registration::RegistrationOptions registration_;
-  std::vector<double> path_m_;  // path length at each frame
   double last_match_m_ = 0.0;
   Eigen::Isometry3d seed_ = Eigen::Isometry3d::Identity();
   PatchAccumulator patches_;

@@ -71,20 +71,11 @@ RevisitTrack::RevisitTrack(const RevisitOptions& revisit, const ReferenceOptions
 std::optional<RevisitMatch> RevisitTrack::AfterFrame(const Mapper& mapper, const FrameBins& bins) {
   const std::vector<FrameResult>& results = mapper.results();
   if (results.empty()) return std::nullopt;
-  while (path_m_.size() < results.size()) {
-    const std::size_t k = path_m_.size();
-    path_m_.push_back(k == 0 ? 0.0
-                             : path_m_.back() + (results[k].step.T_world_body.translation() -
-                                                 results[k - 1].step.T_world_body.translation())
-                                                    .norm());
-  }
   const std::size_t last = results.size() - 1;
-  patches_.Add(last, results[last].step.T_world_body, bins);
-  std::size_t first = last;
-  while (first > 0 && path_m_.back() - path_m_[first - 1] <= options_.window_m) --first;
-  patches_.DropBefore(first);
-  if (path_m_.back() - last_look_m_ < options_.every_m) return std::nullopt;
-  last_look_m_ = path_m_.back();
+  const std::size_t first =
+      patches_.Advance(last, results[last].step.T_world_body, bins, options_.window_m);
+  if (patches_.path_m() - last_look_m_ < options_.every_m) return std::nullopt;
+  last_look_m_ = patches_.path_m();
 
   Saved now;
   now.posts = patches_.Window(first, last, options_.post_m);
@@ -99,7 +90,7 @@ std::optional<RevisitMatch> RevisitTrack::AfterFrame(const Mapper& mapper, const
   std::vector<Eigen::Isometry3d> poses;
   for (std::size_t k = first; k <= last; ++k) poses.push_back(results[k].step.T_world_body);
   now.frame = first + Nearest(poses, centre);
-  now.path_m = path_m_.back();
+  now.path_m = patches_.path_m();
 
   // The earlier ground most of the recent posts lie over, far enough back along the path.
   const Saved* best = nullptr;

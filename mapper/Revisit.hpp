@@ -56,7 +56,6 @@ class RevisitTrack {
   RevisitOptions options_;
   ReferenceOptions checks_;
   registration::RegistrationOptions registration_;
-  std::vector<double> path_m_;
   double last_look_m_ = 0.0;
   PatchAccumulator patches_;
   std::vector<Saved> saved_;
