@@ -153,38 +153,42 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   return out;
 }
 
-FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame) {
+namespace {
+
+// What became of the matches whose frame is `frame`: `frame_of(k)` the frame of match k,
+// `factor[k]` its factor's index into `used` (−1: refused by its own checks).
+template <typename FrameOf>
+FrameReference OutcomeOfFrame(std::size_t matches, FrameOf frame_of,
+                              const std::vector<long>& factor, const std::vector<bool>& used,
+                              std::size_t frame) {
   FrameReference out = FrameReference::kNone;
-  for (std::size_t k = 0; k < graph.reference_matches.size(); ++k) {
-    if (graph.reference_matches[k].frame != frame) continue;
-    const long factor = k < graph.reference_factor.size() ? graph.reference_factor[k] : -1;
-    if (factor < 0) {
+  for (std::size_t k = 0; k < matches; ++k) {
+    if (frame_of(k) != frame) continue;
+    const long f = k < factor.size() ? factor[k] : -1;
+    if (f < 0) {
       if (out == FrameReference::kNone) out = FrameReference::kRefused;
       continue;
     }
-    const auto f = static_cast<std::size_t>(factor);
-    if (f < graph.solution.pose_used.size() && graph.solution.pose_used[f])
+    if (static_cast<std::size_t>(f) < used.size() && used[static_cast<std::size_t>(f)])
       return FrameReference::kUsed;
     out = FrameReference::kRejected;
   }
   return out;
 }
 
+}  // namespace
+
+FrameReference ReferenceOfFrame(const GraphOutcome& graph, std::size_t frame) {
+  return OutcomeOfFrame(
+      graph.reference_matches.size(),
+      [&](std::size_t k) { return graph.reference_matches[k].frame; }, graph.reference_factor,
+      graph.solution.pose_used, frame);
+}
+
 FrameReference RevisitOfFrame(const GraphOutcome& graph, std::size_t frame) {
-  FrameReference out = FrameReference::kNone;
-  for (std::size_t k = 0; k < graph.revisits.size(); ++k) {
-    if (graph.revisits[k].match.frame != frame) continue;
-    const long factor = k < graph.revisit_factor.size() ? graph.revisit_factor[k] : -1;
-    if (factor < 0) {
-      if (out == FrameReference::kNone) out = FrameReference::kRefused;
-      continue;
-    }
-    const auto f = static_cast<std::size_t>(factor);
-    if (f < graph.solution.loop_used.size() && graph.solution.loop_used[f])
-      return FrameReference::kUsed;
-    out = FrameReference::kRejected;
-  }
-  return out;
+  return OutcomeOfFrame(
+      graph.revisits.size(), [&](std::size_t k) { return graph.revisits[k].match.frame; },
+      graph.revisit_factor, graph.solution.loop_used, frame);
 }
 
 const char* ToString(FrameReference outcome) {

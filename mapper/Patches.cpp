@@ -38,6 +38,17 @@ FrameBins BinFrame(const registration::PointCloud& points_body,
   return bins;
 }
 
+std::size_t NearestPose(const std::vector<Eigen::Isometry3d>& poses,
+                        const Eigen::Vector2d& centre) {
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < poses.size(); ++k) {
+    if ((poses[k].translation().head<2>() - centre).norm() <
+        (poses[best].translation().head<2>() - centre).norm())
+      best = k;
+  }
+  return best;
+}
+
 void PatchAccumulator::Add(std::size_t frame, const Eigen::Isometry3d& T_world_body,
                            const FrameBins& bins) {
   Placed placed;

@@ -32,6 +32,9 @@ struct FrameBins {
 FrameBins BinFrame(const registration::PointCloud& points_body,
                    const std::vector<unsigned char>& keep);
 
+/// The index of the pose in `poses` nearest `centre` (world x, y) horizontally; 0 when empty.
+std::size_t NearestPose(const std::vector<Eigen::Isometry3d>& poses, const Eigen::Vector2d& centre);
+
 /// The last frames' bins, placed in the world.
 class PatchAccumulator {
  public:

@@ -1,10 +1,12 @@
-#include "core/Units.hpp"
 #include "mapper/PoseChain.hpp"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include "core/Skew.hpp"
+#include "core/Units.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -49,11 +51,9 @@ bool IsFiniteRigid(const Eigen::Isometry3d& T) {
 Matrix6d Adjoint(const Eigen::Isometry3d& T) {
   const Eigen::Matrix3d R = T.linear();
   const Eigen::Vector3d t = T.translation();
-  Eigen::Matrix3d t_hat;
-  t_hat << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
   Matrix6d ad = Matrix6d::Zero();
   ad.topLeftCorner<3, 3>() = R;
-  ad.bottomLeftCorner<3, 3>() = t_hat * R;
+  ad.bottomLeftCorner<3, 3>() = core::Skew(t) * R;
   ad.bottomRightCorner<3, 3>() = R;
   return ad;
 }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "core/Skew.hpp"
 #include "core/Units.hpp"
 #include "mapper/Mapper.hpp"
 #include "registration/Directions.hpp"
@@ -27,12 +28,6 @@ std::string Figure(double v, int digits) {
   char text[32];
   std::snprintf(text, sizeof text, "%.*f", digits, v);
   return text;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
 }
 
 // Local coordinates: the rover's posts about `source` (their centre), the reference about
@@ -439,12 +434,7 @@ ReferenceMatch MatchPosts(const std::vector<Post>& posts, const io::ReferenceGri
 
   // The factor: on the frame nearest the patch's centre, its information moved from the
   // patch's centre (the correction's rotation point) to that frame's position.
-  std::size_t nearest = 0;
-  for (std::size_t k = 1; k < poses.size(); ++k) {
-    if ((poses[k].translation() - origin).head<2>().norm() <
-        (poses[nearest].translation() - origin).head<2>().norm())
-      nearest = k;
-  }
+  const std::size_t nearest = NearestPose(poses, origin.head<2>());
   out.frame = out.first_frame + nearest;
   // The measurement holds heading, x, y and z: its roll and pitch are the chain's, so that the
   // directions it does not hold carry no residual for the graph to turn into a tilt (the
@@ -465,7 +455,7 @@ ReferenceMatch MatchPosts(const std::vector<Post>& posts, const io::ReferenceGri
   // The match's perturbation turns about the patch's centre in the reference (the target's
   // origin): δt_frame = δt − [d]× δθ with d = t_frame − centre, so J⁻¹ = [I 0; [d]× I].
   Matrix6d J_inv = Matrix6d::Identity();
-  J_inv.bottomLeftCorner<3, 3>() = Skew(out.T_world_body.translation() - local.target);
+  J_inv.bottomLeftCorner<3, 3>() = core::Skew(out.T_world_body.translation() - local.target);
   out.information = J_inv.transpose() * info_origin * J_inv;
   out.matched = true;
   return done("");

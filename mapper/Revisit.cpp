@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/Skew.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::mapper {
@@ -11,22 +12,6 @@ namespace {
 
 // [m] σ of the earlier ground's posts (the reference's σ in the match's noise model).
 constexpr double kPostSigmaM = 0.05;
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-std::size_t Nearest(const std::vector<Eigen::Isometry3d>& poses, const Eigen::Vector2d& centre) {
-  std::size_t best = 0;
-  for (std::size_t k = 1; k < poses.size(); ++k) {
-    if ((poses[k].translation().head<2>() - centre).norm() <
-        (poses[best].translation().head<2>() - centre).norm())
-      best = k;
-  }
-  return best;
-}
 
 }  // namespace
 
@@ -51,7 +36,7 @@ graph::Matrix6d LoopInformation(const graph::Matrix6d& pose_information,
   const Eigen::Matrix3d R = T_world_from.linear();
   graph::Matrix6d A = graph::Matrix6d::Zero();
   A.topLeftCorner<3, 3>() = R;
-  A.bottomLeftCorner<3, 3>() = -R * Skew(T_from_to.translation());
+  A.bottomLeftCorner<3, 3>() = -R * core::Skew(T_from_to.translation());
   A.bottomRightCorner<3, 3>() = R;
   graph::Matrix6d out = A.transpose() * pose_information * A;
   return 0.5 * (out + out.transpose());
@@ -89,7 +74,7 @@ std::optional<RevisitMatch> RevisitTrack::AfterFrame(const Mapper& mapper, const
   centre /= static_cast<double>(now.posts.size());
   std::vector<Eigen::Isometry3d> poses;
   for (std::size_t k = first; k <= last; ++k) poses.push_back(results[k].step.T_world_body);
-  now.frame = first + Nearest(poses, centre);
+  now.frame = first + NearestPose(poses, centre);
   now.path_m = patches_.path_m();
 
   // The earlier ground most of the recent posts lie over, far enough back along the path.
