@@ -445,6 +445,8 @@ std::vector<KeyEntry> BuildRegistry() {
             "the match's covariance x this (neighbouring posts share errors)");
   rf.Int("min_posts", &RF::min_posts, "count", AtLeast(10),
          "fewer of the rover's posts over the reference: no match");
+  rf.Double("max_post_sigma_m", &RF::max_post_sigma_m, "m", GreaterThan(0),
+            "the rover's posts with a larger sigma (far stereo ground) are left out");
 
   using RV = mapper::RevisitOptions;
   SectionKeys<RV> rv(keys, "revisit", &Config::revisit);
@@ -462,6 +464,8 @@ std::vector<KeyEntry> BuildRegistry() {
   rv.Double("search_yaw_deg", &RV::search_yaw_deg, "deg", AtLeast(0), "heading search about it");
   rv.Double("min_overlap", &RV::min_overlap, "fraction", Bounds{0, true, 1, false},
             "of the recent posts over the earlier ground, at least");
+  rv.Double("max_post_sigma_m", &RV::max_post_sigma_m, "m", GreaterThan(0),
+            "posts with a larger sigma (far stereo ground) are left out");
 
   using V = mapper::ServeOptions;
   SectionKeys<V> serve(keys, "serve", &Config::serve);

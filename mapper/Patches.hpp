@@ -9,26 +9,35 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <deque>
+#include <limits>
 #include <vector>
 
 #include "registration/PointCloud.hpp"
 
 namespace rovermap::mapper {
 
-/// One height post: the mean of the points over it, at their centroid (world frame).
+/// One height post (world frame): the frames' bins over it, their height the weighted median
+/// of the bins' (robust to a frame's stray bin), their x, y the weighted mean.
 struct Post {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   std::size_t points = 0;
+  /// [m] σ of the height from the points' own variances; NaN when the cloud carries none.
+  double sigma_m = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// A frame's points binned in its body frame: per bin the sum of the points and their count.
+/// A frame's points binned in its body frame: per bin the inverse-variance weighted mean of its
+/// points within 3σ of their weighted median (a stereo outlier or a far point's error does not
+/// move a post), the summed weight [1/m²] and the points kept.
 struct FrameBins {
-  std::vector<Eigen::Vector3d> sum;
+  std::vector<Eigen::Vector3d> mean;
+  std::vector<double> weight;  ///< Σ 1/σ_z²; the point count when `weighted` is false
   std::vector<std::size_t> count;
+  bool weighted = false;  ///< the points carried covariances
 };
 
-/// Bins `points_body` (those `keep` marks, all when empty) in 0.25 m squares of body x, y.
-/// Never throws.
+/// Bins `points_body` (those `keep` marks, all when empty) in 0.25 m squares of body x, y,
+/// weighing each point by 1/σ_z² from its covariance (alike when the cloud has none). Never
+/// throws.
 FrameBins BinFrame(const registration::PointCloud& points_body,
                    const std::vector<unsigned char>& keep);
 
@@ -49,15 +58,19 @@ class PatchAccumulator {
   /// Forgets the frames before `frame`.
   void DropBefore(std::size_t frame);
   /// The posts of frames [first, last] on the world lattice of `spacing_m` (multiples of it),
-  /// each from at least `min_points` points. Never throws.
+  /// each from at least `min_points` points and, where the points had variances, of σ at most
+  /// `max_sigma_m` (far stereo ground, metres off, places nothing). Never throws.
   std::vector<Post> Window(std::size_t first, std::size_t last, double spacing_m,
+                           double max_sigma_m = std::numeric_limits<double>::infinity(),
                            std::size_t min_points = 3) const;
 
  private:
   struct Placed {
     std::size_t frame = 0;
     std::vector<Eigen::Vector3d> centroid;  // world
+    std::vector<double> weight;
     std::vector<std::size_t> count;
+    bool weighted = false;
   };
   std::deque<Placed> frames_;
   std::vector<double> path_m_;  // per frame Advance took

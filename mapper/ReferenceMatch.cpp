@@ -187,6 +187,7 @@ void Validate(const ReferenceOptions& o) {
   if (!(o.max_sigma_deg > 0.0)) fail("max_sigma_deg", "> 0");
   if (!(o.covariance_scale >= 1.0)) fail("covariance_scale", ">= 1");
   if (o.min_posts < 10) fail("min_posts", ">= 10");
+  if (!(o.max_post_sigma_m > 0.0)) fail("max_post_sigma_m", "> 0");
 }
 
 ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::ReferenceDem& reference,
@@ -337,8 +338,10 @@ ReferenceMatch MatchPosts(const std::vector<Post>& posts, const io::ReferenceGri
                             r.status == registration::RegistrationStatus::kMaxIterations;
         if (!usable) continue;
         const Fit fit = FitOf(posts, grid, local, r.T_target_source);
+        // A placement that slides the posts off the ground under them is not a match: it keeps
+        // at least half the cover of the start (of a revisit's partial overlap, not of all).
         if (fit.covered < static_cast<std::size_t>(options.min_posts) ||
-            fit.covered < posts.size() / 2)
+            fit.covered < before.covered / 2)
           continue;
         solutions.push_back({r.T_target_source, fit, r});
       }
@@ -495,8 +498,9 @@ std::optional<ReferenceMatch> ReferenceTrack::AfterFrame(const Mapper& mapper,
   last_match_m_ = patches_.path_m();
   std::vector<Eigen::Isometry3d> poses;
   for (std::size_t k = first; k <= last; ++k) poses.push_back(results[k].step.T_world_body);
-  ReferenceMatch match = MatchReference(patches_.Window(first, last, reference_.post_spacing_m()),
-                                        reference_, first, poses, seed_, options_, registration_);
+  ReferenceMatch match = MatchReference(
+      patches_.Window(first, last, reference_.post_spacing_m(), options_.max_post_sigma_m),
+      reference_, first, poses, seed_, options_, registration_);
   if (match.matched) seed_ = match.correction;
   matches_.push_back(match);
   return match;

@@ -40,6 +40,9 @@ struct ReferenceOptions {
   /// [count] fewer of the rover's cells (at the reference's posts) with a reference height
   /// under them: no match; >= 10.
   int min_posts = 50;
+  /// [m] the rover's posts whose height σ (from its points' variances) exceeds this are left
+  /// out: far stereo ground is metres off and would outweigh the near; > 0.
+  double max_post_sigma_m = 0.2;
 };
 
 /// Revisits (docs/graph.md): the rover's recent ground matched onto its own earlier ground, a
@@ -61,8 +64,11 @@ struct RevisitOptions {
   double search_m = 6.0;
   /// [deg] heading search about it; >= 0.
   double search_yaw_deg = 3.0;
-  /// [fraction] of the recent posts over the earlier ground, at least; in (0, 1].
-  double min_overlap = 0.3;
+  /// [fraction] of the recent posts over the earlier ground, at least (a way back 4 m beside the
+  /// way out shares about a quarter of its posts); in (0, 1].
+  double min_overlap = 0.15;
+  /// [m] posts whose height σ (from the points' variances) exceeds this are left out; > 0.
+  double max_post_sigma_m = 0.1;
 };
 
 }  // namespace rovermap::mapper

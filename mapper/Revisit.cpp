@@ -26,6 +26,7 @@ void Validate(const RevisitOptions& o) {
   if (!(o.search_m >= 0.0)) fail("search_m", ">= 0");
   if (!(o.search_yaw_deg >= 0.0)) fail("search_yaw_deg", ">= 0");
   if (!(o.min_overlap > 0.0 && o.min_overlap <= 1.0)) fail("min_overlap", "in (0, 1]");
+  if (!(o.max_post_sigma_m > 0.0)) fail("max_post_sigma_m", "> 0");
 }
 
 graph::Matrix6d LoopInformation(const graph::Matrix6d& pose_information,
@@ -63,7 +64,7 @@ std::optional<RevisitMatch> RevisitTrack::AfterFrame(const Mapper& mapper, const
   last_look_m_ = patches_.path_m();
 
   Saved now;
-  now.posts = patches_.Window(first, last, options_.post_m);
+  now.posts = patches_.Window(first, last, options_.post_m, options_.max_post_sigma_m);
   if (now.posts.empty()) return std::nullopt;
   now.grid = GridOfPosts(now.posts, options_.post_m, kPostSigmaM);
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();

@@ -313,7 +313,8 @@ TEST(Patches, FramesArePlacedByTheirPosesAndMergedAtThePostSpacing) {
   keep[0] = 0;
   cloud.points[0].z() = 100.0;  // flagged: must not count
   const mapper::FrameBins bins = mapper::BinFrame(cloud, keep);
-  ASSERT_FALSE(bins.sum.empty());
+  ASSERT_FALSE(bins.mean.empty());
+  EXPECT_FALSE(bins.weighted);
   mapper::PatchAccumulator acc;
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(10.0, 5.0, 1.0);
@@ -341,6 +342,53 @@ TEST(Patches, FramesArePlacedByTheirPosesAndMergedAtThePostSpacing) {
   T.translation() = Eigen::Vector3d(50.0, 30.0, 1.0);
   east.Add(0, T, bins);
   EXPECT_EQ(west.Window(0, 0, 1.0).size(), east.Window(0, 0, 1.0).size());
+}
+
+// Posts from points with variances: within a bin, a stray point (a stereo outlier the mask
+// missed) is left out and precise points outweigh imprecise ones; a post whose σ exceeds the
+// window's limit (far stereo ground) is left out, and its σ is that of the weighted mean.
+TEST(Patches, AStrayPointAndImpreciseGroundDoNotMoveAPost) {
+  registration::PointCloud cloud;
+  auto add = [&](double x, double y, double z, double sigma) {
+    cloud.points.emplace_back(x, y, z);
+    cloud.covariances.push_back(Eigen::Vector3d(1e-4, 1e-4, sigma * sigma).asDiagonal());
+  };
+  // Post (0, 0) of 1 m: nine precise points at z 0 (σ 0.02 m), one imprecise at 0.3 (σ 0.3 m),
+  // one stray at 5 m (σ 0.02 m: its own variance does not give it away).
+  for (int i = 0; i < 9; ++i) add(0.05 + 0.02 * i, 0.05, 0.0, 0.02);
+  add(0.1, 0.1, 0.3, 0.3);
+  add(0.15, 0.15, 5.0, 0.02);
+  // Post (10, 0): only imprecise points (σ 0.5 m), enough of them.
+  for (int i = 0; i < 9; ++i) add(10.05 + 0.02 * i, 0.05, 1.0, 0.5);
+  const mapper::FrameBins bins = mapper::BinFrame(cloud, {});
+  ASSERT_TRUE(bins.weighted);
+  mapper::PatchAccumulator acc;
+  acc.Add(0, Eigen::Isometry3d::Identity(), bins);
+  std::vector<mapper::Post> posts = acc.Window(0, 0, 1.0);
+  ASSERT_EQ(posts.size(), 2u);
+  std::sort(posts.begin(), posts.end(),
+            [](const mapper::Post& a, const mapper::Post& b) { return a.p.x() < b.p.x(); });
+  // The stray point out, the imprecise one weighing 1/225 of a precise one.
+  const double kMean = 0.3 / 0.09 / (9.0 / 0.0004 + 1.0 / 0.09);
+  EXPECT_EQ(posts[0].points, 10u);
+  EXPECT_NEAR(posts[0].p.z(), kMean, 1e-9);
+  EXPECT_NEAR(posts[0].sigma_m, 1.0 / std::sqrt(9.0 / 0.0004 + 1.0 / 0.09), 1e-9);
+  EXPECT_NEAR(posts[1].sigma_m, 0.5 / 3.0, 1e-9);
+  // A limit of 0.1 m leaves the imprecise post out.
+  posts = acc.Window(0, 0, 1.0, 0.1);
+  ASSERT_EQ(posts.size(), 1u);
+  EXPECT_LT(posts[0].p.x(), 1.0);
+  // Two frames over one post: the height is their weighted median, not pulled by the stray one.
+  registration::PointCloud stray;
+  for (int i = 0; i < 9; ++i) {
+    stray.points.emplace_back(0.05 + 0.02 * i, 0.05, 2.0);
+    stray.covariances.push_back(Eigen::Vector3d(1e-4, 1e-4, 0.03 * 0.03).asDiagonal());
+  }
+  acc.Add(1, Eigen::Isometry3d::Identity(), mapper::BinFrame(stray, {}));
+  acc.Add(2, Eigen::Isometry3d::Identity(), bins);
+  posts = acc.Window(0, 2, 1.0, 0.1);
+  ASSERT_EQ(posts.size(), 1u);
+  EXPECT_NEAR(posts[0].p.z(), kMean, 1e-9);
 }
 
 // LoopInformation: a pose factor's information at frame `to` (world axes, about its position)
