@@ -273,7 +273,7 @@ int RunReplay(const ReplayArgs& args) {
               << (g.solved ? "" : "; kept the frame-to-frame trajectory: " + g.message) << "\n";
     if (g.solved) {
       graph->frames_refused = mapper::RefuseFrames(
-          *source, mapper.get(), g.T_world_body, [&](std::size_t k, std::size_t n) {
+          *source, mapper.get(), g.T_world_body, g.covariance, [&](std::size_t k, std::size_t n) {
             if (k == n || k % 10 == 0)
               std::cerr << "replay: fusing the maps again from the pose graph, frame " << k << "/"
                         << n << "\n";

@@ -428,6 +428,8 @@ std::vector<KeyEntry> BuildRegistry() {
             "sigma of the reference's heights where no band gives it");
   rf.Bool("vertical_trusted", &RF::vertical_trusted,
           "the reference's vertical datum is the sequence's: a match also fixes the height");
+  rf.Double("horizontal_sigma_m", &RF::horizontal_sigma_m, "m", GreaterThan(0),
+            "sigma per axis of the reference's horizontal placement (its georeferencing)");
   rf.Bool("required", &RF::required,
           "an unusable reference DEM stops the run (exit 1) instead of being left out");
   rf.Double("search_m", &RF::search_m, "m", AtLeast(0),

@@ -141,18 +141,12 @@ struct AbsolutePoseCost {
   Eigen::Quaterniond q_meas;
   Eigen::Vector3d t_meas;
   Matrix6d sqrt_information;
+  bool use_z = false;   // PoseFactor::z_offset
+  bool use_xy = false;  // PoseFactor::xy_offset
 
+  // The measured position is the reference's: t_meas = t + [xy; z] (offsets it reads at).
   template <typename T>
-  bool operator()(const T* q, const T* t, T* residual) const {
-    return Residual(q, t, T(0), residual);
-  }
-  // With the shared vertical offset (PoseFactor::z_offset).
-  template <typename T>
-  bool operator()(const T* q, const T* t, const T* offset, T* residual) const {
-    return Residual(q, t, offset[0], residual);
-  }
-  template <typename T>
-  bool Residual(const T* q, const T* t, const T& offset, T* residual) const {
+  bool operator()(const T* q, const T* t, const T* z, const T* xy, T* residual) const {
     const Eigen::Map<const Eigen::Quaternion<T>> Q(q);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Tt(t);
     const Eigen::Quaternion<T> q_d = Q * q_meas.conjugate().cast<T>();
@@ -160,9 +154,24 @@ struct AbsolutePoseCost {
     Eigen::Matrix<T, 6, 1> e;
     ceres::QuaternionToAngleAxis(wxyz, e.data());
     e.template tail<3>() = Tt - t_meas.cast<T>();
-    e(5) += offset;  // the reference reads `offset` higher: t_z − (t_meas_z − offset)
+    if (use_xy) {
+      e(3) += xy[0];
+      e(4) += xy[1];
+    }
+    if (use_z) e(5) += z[0];  // the reference reads `offset` higher: t_z − (t_meas_z − offset)
     Eigen::Map<Eigen::Matrix<T, 6, 1>> out(residual);
     out = sqrt_information.cast<T>() * e;
+    return true;
+  }
+};
+
+// The prior of the shared horizontal offset: zero, σ per axis.
+struct OffsetPriorCost {
+  double inverse_sigma = 1.0;
+  template <typename T>
+  bool operator()(const T* xy, T* residual) const {
+    residual[0] = xy[0] * inverse_sigma;
+    residual[1] = xy[1] * inverse_sigma;
     return true;
   }
 };
@@ -182,12 +191,13 @@ Matrix6d SqrtOfInformation(const Matrix6d& information, int* rank) {
   return L;
 }
 
-double PoseChi2(const PoseFactor& f, const Matrix6d& L, const Eigen::Isometry3d& T,
-                double z_offset) {
+double PoseChi2(const PoseFactor& f, const Matrix6d& L, const Eigen::Isometry3d& T, double z_offset,
+                const double* xy_offset) {
   Eigen::Matrix<double, 6, 1> e;
   const Eigen::AngleAxisd aa(T.linear() * f.T_world_body.linear().transpose());
   e << aa.angle() * aa.axis(), T.translation() - f.T_world_body.translation();
   if (f.z_offset) e(5) += z_offset;
+  if (f.xy_offset) e.segment<2>(3) += Eigen::Vector2d(xy_offset[0], xy_offset[1]);
   return (L * e).squaredNorm();
 }
 
@@ -214,6 +224,56 @@ double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
   return (sqrt_information * (T * f.lever_arm_body - f.position_world)).squaredNorm();
 }
 
+// Every node's marginal covariance at the solution of `problem`; given node 0 (held constant)
+// when `given_first`.
+// Ceres's tangent of an EigenQuaternionManifold block is δ with q' = [cos|δ|, sin|δ| δ/|δ|] ⊗ q:
+// a left (world) rotation by the rotation vector 2δ; a translation block's is the world
+// translation. The chain's convention is a right perturbation in the body frame, (Exp(ξr), ξt)
+// applied after T: ξr = Rᵀ·2δ, ξt = Rᵀ·δt.
+void MarginalCovariances(ceres::Problem* problem, std::vector<Node>* nodes, bool given_first,
+                         PoseGraphResult* result) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t first = given_first ? 1 : 0;
+  if (given_first) {
+    problem->SetParameterBlockConstant((*nodes)[0].q);
+    problem->SetParameterBlockConstant((*nodes)[0].t);
+  }
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::SPARSE_QR;
+  options.num_threads = 1;
+  ceres::Covariance covariance(options);
+  std::vector<std::pair<const double*, const double*>> blocks;
+  for (std::size_t k = first; k < nodes->size(); ++k) {
+    const Node& n = (*nodes)[k];
+    blocks.emplace_back(n.q, n.q);
+    blocks.emplace_back(n.q, n.t);
+    blocks.emplace_back(n.t, n.t);
+  }
+  if (!covariance.Compute(blocks, problem)) {
+    result->covariance_message = "the graph's covariance could not be computed (rank deficient)";
+    return;
+  }
+  result->covariance.assign(nodes->size(), Matrix6d::Zero());
+  result->covariance_given_first = given_first;
+  for (std::size_t k = first; k < nodes->size(); ++k) {
+    const Node& n = (*nodes)[k];
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> qq, qt, tt;
+    covariance.GetCovarianceBlockInTangentSpace(n.q, n.q, qq.data());
+    covariance.GetCovarianceBlockInTangentSpace(n.q, n.t, qt.data());
+    covariance.GetCovarianceBlockInTangentSpace(n.t, n.t, tt.data());
+    Matrix6d world;  // [2δ; δt]
+    world << 4.0 * qq, 2.0 * qt, 2.0 * qt.transpose(), tt;
+    const Eigen::Matrix3d Rt = FromNode(n).linear().transpose();
+    Matrix6d B = Matrix6d::Zero();
+    B.topLeftCorner<3, 3>() = Rt;
+    B.bottomRightCorner<3, 3>() = Rt;
+    const Matrix6d body = B * world * B.transpose();
+    result->covariance[k] = 0.5 * (body + body.transpose());
+  }
+  result->covariance_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
 
 void Validate(const PoseGraphOptions& o) {
@@ -227,6 +287,7 @@ void Validate(const PoseGraphOptions& o) {
   positive(o.first_pose_sigma_m, "first_pose_sigma_m");
   positive(o.min_increment_sigma_rad, "min_increment_sigma_rad");
   positive(o.min_increment_sigma_m, "min_increment_sigma_m");
+  positive(o.xy_offset_sigma_m, "xy_offset_sigma_m");
   if (o.max_gate_rounds < 1) throw std::invalid_argument("graph.max_gate_rounds must be >= 1");
   if (o.min_fixes < 1) throw std::invalid_argument("graph.min_fixes must be >= 1");
   if (o.max_iterations < 1) throw std::invalid_argument("graph.max_iterations must be >= 1");
@@ -333,6 +394,7 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   std::vector<bool> use_pose(poses.size(), true);
   std::vector<bool> use_loop(loops.size(), true);
   double z_offset = 0.0;  // warm-started like the nodes
+  double xy_offset[2] = {0.0, 0.0};
   std::vector<Node> nodes;
   for (int round = 0; round < options.max_gate_rounds; ++round) {
     // The first round starts from the chained trajectory, the others from the last solution
@@ -371,19 +433,33 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     for (std::size_t k = 0; k < poses.size(); ++k) {
       if (!use_pose[k]) continue;
       const PoseFactor& f = poses[k];
-      auto* cost = new AbsolutePoseCost{Eigen::Quaterniond(f.T_world_body.linear()).normalized(),
-                                        f.T_world_body.translation(), pose_L[k]};
+      auto* cost =
+          new AbsolutePoseCost{Eigen::Quaterniond(f.T_world_body.linear()).normalized(),
+                               f.T_world_body.translation(), pose_L[k], f.z_offset, f.xy_offset};
       ceres::LossFunction* loss =
           f.gated ? new ceres::HuberLoss(options.fix_huber_sigmas) : nullptr;
-      if (f.z_offset) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<AbsolutePoseCost, 6, 4, 3, 1>(cost), loss,
-            nodes[f.node].q, nodes[f.node].t, &z_offset);
-      } else {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AbsolutePoseCost, 6, 4, 3>(cost),
-                                 loss, nodes[f.node].q, nodes[f.node].t);
-      }
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<AbsolutePoseCost, 6, 4, 3, 1, 2>(cost), loss,
+          nodes[f.node].q, nodes[f.node].t, &z_offset, xy_offset);
       if (f.gated) ++used;
+    }
+    {
+      // An offset no factor of this round reads is held where it is; the horizontal one has
+      // its prior.
+      bool z_read = false, xy_read = false;
+      for (std::size_t k = 0; k < poses.size(); ++k) {
+        z_read = z_read || (use_pose[k] && poses[k].z_offset);
+        xy_read = xy_read || (use_pose[k] && poses[k].xy_offset);
+      }
+      if (problem.HasParameterBlock(&z_offset) && !z_read)
+        problem.SetParameterBlockConstant(&z_offset);
+      if (xy_read) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<OffsetPriorCost, 2, 2>(
+                                     new OffsetPriorCost{1.0 / options.xy_offset_sigma_m}),
+                                 nullptr, xy_offset);
+      } else if (problem.HasParameterBlock(xy_offset)) {
+        problem.SetParameterBlockConstant(xy_offset);
+      }
     }
     for (std::size_t k = 0; k < loops.size(); ++k) {
       if (!use_loop[k]) continue;
@@ -444,7 +520,7 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     }
     for (std::size_t k = 0; k < poses.size(); ++k) {
       result.pose_chi2[k] =
-          PoseChi2(poses[k], pose_L[k], result.T_world_body[poses[k].node], z_offset);
+          PoseChi2(poses[k], pose_L[k], result.T_world_body[poses[k].node], z_offset, xy_offset);
       if (use_pose[k] && poses[k].gated)
         worst = std::max(worst, result.pose_chi2[k] / pose_gate[k]);
     }
@@ -474,8 +550,19 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
         changed = true;
       }
     }
-    if (!changed) break;
+    if (!changed) {
+      // Absolute: with a fix or a reference match in the solution, against the world; with
+      // loops alone, given node 0 (the start as the chain takes it, exact).
+      bool absolute = false;
+      for (std::size_t k = 0; k < positions.size(); ++k) absolute = absolute || use[k];
+      for (std::size_t k = 0; k < poses.size(); ++k)
+        absolute = absolute || (use_pose[k] && poses[k].gated);
+      if (options.covariance) MarginalCovariances(&problem, &nodes, !absolute, &result);
+      break;
+    }
   }
+  if (!options.covariance) result.covariance_message = "not asked for";
+  if (!result.solved) result.covariance_message = "the graph was not solved";
   result.fixes_used = 0;
   for (std::size_t k = 0; k < positions.size(); ++k) {
     result.fix_used[k] = result.solved && use[k];
@@ -483,6 +570,8 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   }
   result.fixes_rejected = positions.size() - result.fixes_used;
   result.z_offset_m = result.solved ? z_offset : 0.0;
+  result.xy_offset_m =
+      result.solved ? Eigen::Vector2d(xy_offset[0], xy_offset[1]) : Eigen::Vector2d::Zero();
   result.loops_used = 0;
   for (std::size_t k = 0; k < loops.size(); ++k) {
     result.loop_used[k] = result.solved && use_loop[k];

@@ -39,6 +39,11 @@ struct PoseGraphOptions {
   /// exact) would be a hard constraint the solver cannot weigh; > 0.
   double min_increment_sigma_rad = 1e-6;
   double min_increment_sigma_m = 1e-6;
+  /// [m] σ per axis of the shared horizontal offset of the PoseFactor::xy_offset factors (a
+  /// reference DEM's georeferencing); > 0.
+  double xy_offset_sigma_m = 1.0;
+  /// Compute every node's marginal covariance at the solution (PoseGraphResult::covariance).
+  bool covariance = true;
 };
 
 /// @throw std::invalid_argument naming the field if a value is out of range.
@@ -78,6 +83,11 @@ struct PoseFactor {
   /// t_z − (t_meas_z − offset), one offset shared by every such factor and solved for
   /// (PoseGraphResult::z_offset_m).
   bool z_offset = false;
+  /// The measured x, y are the reference's, misplaced by one shared horizontal offset (its
+  /// georeferencing error), solved for with the prior PoseGraphOptions::xy_offset_sigma_m
+  /// (PoseGraphResult::xy_offset_m): what places the reference in the world enters every
+  /// match's absolute uncertainty, not each match's own σ.
+  bool xy_offset = false;
 };
 
 /// A revisit (loop closure): T_from_to measured by matching the ground of `to` onto the ground
@@ -115,11 +125,23 @@ struct PoseGraphResult {
   /// [m] how far above the nodes' vertical datum the PoseFactor::z_offset factors' is (0
   /// without them).
   double z_offset_m = 0.0;
+  /// [m] the PoseFactor::xy_offset factors' horizontal offset (east, north; 0 without them).
+  Eigen::Vector2d xy_offset_m = Eigen::Vector2d::Zero();
   int solves = 0;      ///< gate rounds run
   int iterations = 0;  ///< Levenberg–Marquardt iterations, all solves
   double final_cost = 0.0;
   double solve_ms = 0.0;
   std::string message;
+  /// Per node, when solved and PoseGraphOptions::covariance: the marginal covariance of its
+  /// pose (ChainStep::covariance's convention: a right perturbation in the body frame,
+  /// [rx ry rz tx ty tz]), robust losses applied as at the solution. Against the world when a
+  /// position or gated pose factor is used; with loop factors alone given node 0 (zero there,
+  /// as the chain's: nothing absolute places the start). Empty when not computed;
+  /// covariance_message then says why.
+  std::vector<Matrix6d> covariance;
+  bool covariance_given_first = false;
+  std::string covariance_message;
+  double covariance_ms = 0.0;
 };
 
 /// Solves for every node's T_world_body from `initial` (one per node, the chained trajectory):

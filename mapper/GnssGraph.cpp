@@ -65,6 +65,7 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
     return std::nullopt;
   }
   std::vector<graph::PoseFactor> poses;
+  double xy_sigma = 1.0;  // the reference's placement σ (one reference per run)
   GraphOutcome out;
   out.reference_matches = matches;
   for (const ReferenceMatch& m : matches) {
@@ -78,6 +79,8 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
     f.T_world_body = m.T_world_body;
     f.information = m.information;
     f.z_offset = !m.vertical_absolute;
+    f.xy_offset = m.placement_sigma_m > 0.0;
+    if (f.xy_offset) xy_sigma = m.placement_sigma_m;
     poses.push_back(f);
   }
   std::vector<graph::LoopFactor> loops;
@@ -92,6 +95,7 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   solver.fix_gate_chi2 = options.fix_gate_chi2;
   solver.fix_huber_sigmas = options.fix_huber_sigmas;
   solver.max_gate_rounds = options.max_gate_rounds;
+  solver.xy_offset_sigma_m = xy_sigma;
   solver.min_fixes = poses.empty() && loops.empty() ? options.min_gnss_fixes : 1;
   graph::Validate(solver);
 
@@ -205,8 +209,18 @@ const char* ToString(FrameReference outcome) {
   return "none";
 }
 
+ChainStep ReportedStep(const FrameResult& result, const GraphOutcome* graph) {
+  ChainStep step = result.step;
+  if (graph == nullptr || !graph->solution.solved) return step;
+  const graph::PoseGraphResult& g = graph->solution;
+  if (result.index < g.T_world_body.size()) step.T_world_body = g.T_world_body[result.index];
+  if (result.index < g.covariance.size()) step.covariance = g.covariance[result.index];
+  return step;
+}
+
 std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,
                          const std::vector<Eigen::Isometry3d>& T_world_body,
+                         const std::vector<graph::Matrix6d>& covariance,
                          const std::function<void(std::size_t, std::size_t)>& progress) {
   mapper->ResetMaps();
   const std::vector<FrameResult>& results = mapper->results();
@@ -219,6 +233,7 @@ std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,
         if (prepared.loaded.ok) {
           ChainStep step = results[k].step;
           step.T_world_body = T_world_body[k];
+          if (k < covariance.size()) step.covariance = covariance[k];
           mapper->FuseAgain(prepared, step);
         } else {
           ++refused;

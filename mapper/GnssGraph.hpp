@@ -55,6 +55,11 @@ const char* ToString(FrameReference outcome);
 /// The same for a revisit whose later frame is `frame`. Never throws.
 FrameReference RevisitOfFrame(const GraphOutcome& graph, std::size_t frame);
 
+/// The pose and covariance the outputs report for `result` (drift.csv's σ, the DEM's
+/// re-fusion, summary.json's pose_uncertainty): the graph's pose and marginal covariance when
+/// it was solved with them, else the chain's step. Never throws.
+ChainStep ReportedStep(const FrameResult& result, const GraphOutcome* graph);
+
 /// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
 /// registration's covariance plus the per-step σ of the stereo rig's systematic error
 /// (mapper.stereo_systematic_*; a white-noise stand-in for an error the graph does not model
@@ -81,11 +86,13 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                        const MapperOptions& mapper_options);
 
 /// Empties `mapper`'s DEM and OctoMap and fuses every frame it fused before again, read anew
-/// from `source` (random access), at `T_world_body` (one per result) with the chain's
-/// covariance. `progress(k, n)` after each frame. @return frames that could not be read again
-/// (left out of the maps). Never throws on data.
+/// from `source` (random access), at `T_world_body` (one per result) with `covariance` (the
+/// graph's marginals; the chain's where it has none for a frame). `progress(k, n)` after each
+/// frame. @return frames that could not be read again (left out of the maps). Never throws on
+/// data.
 std::size_t RefuseFrames(const io::FrameSource& source, Mapper* mapper,
                          const std::vector<Eigen::Isometry3d>& T_world_body,
+                         const std::vector<graph::Matrix6d>& covariance,
                          const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 }  // namespace rovermap::mapper

@@ -1,9 +1,10 @@
-#include "core/Units.hpp"
 #include "mapper/PoseUncertainty.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+
+#include "core/Units.hpp"
 
 namespace rovermap::mapper {
 namespace {
@@ -28,21 +29,33 @@ PoseSigmas SigmasOf(const ChainStep& step) {
 }
 
 std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>& results) {
-  const FrameResult* first = nullptr;
+  std::vector<ChainStep> steps;
+  steps.reserve(results.size());
+  for (const FrameResult& r : results) steps.push_back(r.step);
+  return CheckCalibration(results, steps, false);
+}
+
+std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>& results,
+                                                 const std::vector<ChainStep>& steps,
+                                                 bool against_world) {
+  std::optional<std::size_t> first;
   std::vector<double> nees;
-  for (const FrameResult& r : results) {
+  for (std::size_t k = 0; k < results.size() && k < steps.size(); ++k) {
+    const FrameResult& r = results[k];
     if (!r.T_world_body_truth) continue;
-    if (first == nullptr) {
-      first = &r;
-      continue;
+    Eigen::Isometry3d T_true = *r.T_world_body_truth;
+    if (!against_world) {
+      if (!first) {
+        first = k;
+        continue;
+      }
+      T_true = steps[*first].T_world_body * results[*first].T_world_body_truth->inverse() * T_true;
     }
-    const Eigen::Isometry3d T_true =
-        first->step.T_world_body * first->T_world_body_truth->inverse() * *r.T_world_body_truth;
-    const Eigen::Isometry3d D = r.step.T_world_body.inverse() * T_true;
+    const Eigen::Isometry3d D = steps[k].T_world_body.inverse() * T_true;
     const Eigen::AngleAxisd aa(D.linear());
     Eigen::Matrix<double, 6, 1> xi;
     xi << aa.angle() * aa.axis(), D.translation();
-    const Eigen::LDLT<Matrix6d> ldlt(r.step.covariance);
+    const Eigen::LDLT<Matrix6d> ldlt(steps[k].covariance);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
     const double value = xi.dot(ldlt.solve(xi));
     if (std::isfinite(value)) nees.push_back(value);

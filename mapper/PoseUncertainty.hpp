@@ -35,4 +35,11 @@ struct CalibrationCheck {
 /// nullopt when no frame qualifies. Never throws.
 std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>& results);
 
+/// The same for other poses and covariances of the same frames (`steps`, one per result: the
+/// pose graph's): with `against_world` the truth as it is (a graph held by fixes or a reference
+/// states its uncertainty against the world), frame 0 included. Never throws.
+std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>& results,
+                                                 const std::vector<ChainStep>& steps,
+                                                 bool against_world);
+
 }  // namespace rovermap::mapper

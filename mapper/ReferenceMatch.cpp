@@ -188,6 +188,7 @@ void Validate(const ReferenceOptions& o) {
   if (!(o.covariance_scale >= 1.0)) fail("covariance_scale", ">= 1");
   if (o.min_posts < 10) fail("min_posts", ">= 10");
   if (!(o.max_post_sigma_m > 0.0)) fail("max_post_sigma_m", "> 0");
+  if (!(o.horizontal_sigma_m > 0.0)) fail("horizontal_sigma_m", "> 0");
 }
 
 ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::ReferenceDem& reference,
@@ -209,8 +210,11 @@ ReferenceMatch MatchReference(const std::vector<Post>& posts, const io::Referenc
     const Eigen::Vector2d pad = Eigen::Vector2d::Constant(margin);
     grid = reference.Resample(placed.min() - pad, placed.max() + pad);
   }
-  return MatchPosts(posts, grid, first_frame, poses, seed, options, registration,
-                    "no reference height under the window (outside the reference DEM)");
+  ReferenceMatch out =
+      MatchPosts(posts, grid, first_frame, poses, seed, options, registration,
+                 "no reference height under the window (outside the reference DEM)");
+  out.placement_sigma_m = options.horizontal_sigma_m;
+  return out;
 }
 
 io::ReferenceGrid GridOfPosts(const std::vector<Post>& posts, double spacing_m, double sigma_m) {

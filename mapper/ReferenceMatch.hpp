@@ -44,6 +44,10 @@ struct ReferenceMatch {
   /// z is on the sequence's vertical datum (ReferenceOptions::vertical_trusted); false: on the
   /// reference's, an unknown offset away that the graph estimates (one for all matches).
   bool vertical_absolute = false;
+  /// [m] σ of the reference's horizontal placement in the world (reference.horizontal_sigma_m):
+  /// shared by every match of it, so the graph solves for one offset with this prior; 0: the
+  /// matches are its own ground (a revisit), nothing shared.
+  double placement_sigma_m = 0.0;
   /// Information of T_world_body for the residual [log(R R_measᵀ); t − t_meas] (world axes,
   /// rad and m): heading, x, y and z at the patch's centre (zero in roll and pitch there),
   /// moved to the frame's position (the lever gives roll and pitch a little).

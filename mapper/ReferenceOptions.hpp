@@ -15,6 +15,10 @@ struct ReferenceOptions {
   double sigma_m = 0.5;
   /// The reference's vertical datum is the sequence's: a match also fixes the height.
   bool vertical_trusted = false;
+  /// [m] σ per axis of the reference's horizontal placement in the world (its georeferencing:
+  /// an orbital DTM's tie to its control). Shared by every match, it bounds how well the
+  /// matches place the rover in the world, however sharp each one is; > 0.
+  double horizontal_sigma_m = 1.0;
   /// A reference DEM that cannot be used (unreadable, another body, no coverage) stops the
   /// run (exit 1) instead of being reported and left out.
   bool required = false;

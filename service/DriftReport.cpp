@@ -101,7 +101,7 @@ std::string DriftCsv(const std::vector<FrameResult>& results, const GraphOutcome
       << r.inlier_ratio << ',' << r.rms_m << ',' << r.time.total_ms << ',' << r.matcher_status
       << ',' << r.conditioning << ',' << r.points << ',' << r.outliers_removed << ','
       << Quoted(r.detail);
-    const PoseSigmas sd = SigmasOf(r.step);
+    const PoseSigmas sd = SigmasOf(ReportedStep(r, graph));
     s << ',' << sd.x_m << ',' << sd.y_m << ',' << sd.z_m << ',' << sd.roll_deg << ','
       << sd.pitch_deg << ',' << sd.yaw_deg << ',' << ToString(r.image_check);
     const bool solved =
@@ -202,7 +202,18 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
     summary["metrics"] = {{"registered", eval::ToJson(drift->registered)},
                           {"odometry", eval::ToJson(drift->odometry)}};
   }
-  if (const std::optional<CalibrationCheck> check = CheckCalibration(results)) {
+  // The uncertainty of the trajectory written: the graph's when it states one.
+  const GraphOutcome* graph = state.graph ? &*state.graph : nullptr;
+  std::optional<CalibrationCheck> check;
+  if (graph != nullptr && graph->solution.solved &&
+      graph->solution.covariance.size() == results.size()) {
+    std::vector<ChainStep> steps;
+    for (const FrameResult& r : results) steps.push_back(ReportedStep(r, graph));
+    check = CheckCalibration(results, steps, !graph->solution.covariance_given_first);
+  } else {
+    check = CheckCalibration(results);
+  }
+  if (check) {
     summary["pose_uncertainty"] = {{"frames", check->frames},
                                    {"within_2sigma", check->within_2sigma},
                                    {"nees_mean", Number(check->nees_mean)},
@@ -267,6 +278,10 @@ nlohmann::json GraphJson(const GraphOutcome& graph) {
           {"reference_refused", refused},
           {"reference_unusable", graph.reference_unusable},
           {"reference_vertical_offset_m", s.z_offset_m},
+          {"reference_horizontal_offset_m", {s.xy_offset_m.x(), s.xy_offset_m.y()}},
+          {"covariance", s.covariance.empty()       ? s.covariance_message
+                         : s.covariance_given_first ? "given the first frame"
+                                                    : "against the world"},
           {"reference", matches},
           {"revisits", graph.revisits.size()},
           {"revisits_used", s.loops_used},
@@ -288,7 +303,10 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
                     const std::optional<DriftMetrics>& drift, const GraphOutcome* graph,
                     const std::optional<DriftMetrics>& chained) {
   const bool graph_solved = graph != nullptr && graph->solution.solved;
-  const bool chain_sigma = !graph_solved;
+  // The σ line goes with the drift from the start: the chain's, or a graph's given its first
+  // frame (loops alone); a graph held against the world states another uncertainty.
+  const bool chain_sigma = !graph_solved || (graph->solution.covariance.size() == results.size() &&
+                                             graph->solution.covariance_given_first);
   using namespace eval::plot;
   const cv::Scalar kRed(40, 40, 210);
   std::vector<double> index, dt, dr, fallback_index;
@@ -333,10 +351,11 @@ void WriteDriftPlot(const std::filesystem::path& path, const std::vector<FrameRe
   // its position covariance: an error above it is one the covariance did not expect).
   std::vector<double> two_sigma;
   for (const FrameResult& r : results) {
-    const PoseSigmas s = SigmasOf(r.step);  // drift.csv's σ columns
+    const PoseSigmas s = SigmasOf(ReportedStep(r, graph));  // drift.csv's σ columns
     two_sigma.push_back(2.0 * std::sqrt(s.x_m * s.x_m + s.y_m * s.y_m + s.z_m * s.z_m));
   }
-  const std::string sigma_label = "registered: 2 sigma it states (2 sqrt trace, position)";
+  const std::string sigma_label = std::string(graph_solved ? "pose graph" : "registered") +
+                                  ": 2 sigma it states (2 sqrt trace, position)";
   const cv::Scalar sigma_colour = Colour(2);
   std::vector<std::pair<std::string, cv::Scalar>> legend;
   const cv::Rect area(80, 740, 800, 360);
