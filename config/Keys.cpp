@@ -415,6 +415,9 @@ std::vector<KeyEntry> BuildRegistry() {
             "a fix's residual beyond this weighs linearly (Huber)");
   gr.Int("min_gnss_fixes", &G::min_gnss_fixes, "count", AtLeast(1),
          "fewer fixes left after the gate: the frame-to-frame trajectory is kept");
+  gr.Int("covariance_max_frames", &G::covariance_max_frames, "frames", AtLeast(0),
+         "the graph's marginal covariances up to this many frames (cost grows with the square); 0 "
+         "= never");
   gr.Int("max_gate_rounds", &G::max_gate_rounds, "count", AtLeast(1),
          "solve-and-reject rounds at most");
 

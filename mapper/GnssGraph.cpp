@@ -96,6 +96,8 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   solver.fix_huber_sigmas = options.fix_huber_sigmas;
   solver.max_gate_rounds = options.max_gate_rounds;
   solver.xy_offset_sigma_m = xy_sigma;
+  solver.covariance =
+      results.size() <= static_cast<std::size_t>(std::max(options.covariance_max_frames, 0));
   solver.min_fixes = poses.empty() && loops.empty() ? options.min_gnss_fixes : 1;
   graph::Validate(solver);
 
@@ -156,6 +158,12 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   // chain's information many times over (KITTI with fixes: roll σ 0.17° where the error is
   // 0.95° and the chain says 0.92°). Their rows and columns are scaled up to the chain's σ,
   // correlations kept.
+  if (!solver.covariance && out.solution.solved) {
+    out.solution.covariance_message = "not computed: " + std::to_string(results.size()) +
+                                      " frames, more than graph.covariance_max_frames " +
+                                      std::to_string(options.covariance_max_frames) +
+                                      " (the chain's is reported)";
+  }
   std::vector<graph::Matrix6d>& covariance = out.solution.covariance;
   for (std::size_t k = 0; k < covariance.size() && k < results.size(); ++k) {
     graph::Matrix6d S = graph::Matrix6d::Identity();

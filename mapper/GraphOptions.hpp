@@ -22,6 +22,10 @@ struct GraphOptions {
   int min_gnss_fixes = 3;
   /// [count] solve-and-gate rounds at most; >= 1.
   int max_gate_rounds = 20;
+  /// [frames] the graph's marginal covariances are computed up to this many frames (their cost
+  /// grows with the square: 1000 frames 0.75 s, 3000 frames 7 s); beyond it drift.csv's σ and
+  /// the DEM's stay the chain's, and summary.json says so; 0 = never; >= 0.
+  int covariance_max_frames = 2000;
 };
 
 }  // namespace rovermap::mapper

@@ -304,6 +304,25 @@ TEST_F(GnssInput, FixesThatAgreeAreUsedAndTheMapsFusedAgain) {
               0.08)
         << k;
   }
+  // The graph's σ (fixes of 2 cm): drift.csv's last frame states centimetres.
+  EXPECT_EQ(s["graph"]["covariance"], "against the world");
+  const auto rows = ReadCsv(out / "drift.csv");
+  EXPECT_LT(std::stod(rows.back().at("sigma_x_m")), 0.05);
+  // Beyond graph.covariance_max_frames the chain's σ is reported, and summary.json says why.
+  const fs::path capped = dir_ / "capped";
+  ASSERT_EQ(Rovermap("replay " + seq.string() + " --out " + capped.string() +
+                     " --set graph.covariance_max_frames=2")
+                .status,
+            0);
+  const nlohmann::json c = nlohmann::json::parse(Slurp(capped / "summary.json"));
+  EXPECT_TRUE(c["graph"]["solved"].get<bool>());
+  EXPECT_NE(c["graph"]["covariance"].get<std::string>().find("graph.covariance_max_frames"),
+            std::string::npos)
+      << c["graph"].dump();
+  // (the chain's covariance, turned by the graph's slightly different heading)
+  const double chain_sigma = std::stod(ReadCsv(dir_ / "plain/drift.csv").back().at("sigma_x_m"));
+  EXPECT_NEAR(std::stod(ReadCsv(capped / "drift.csv").back().at("sigma_x_m")), chain_sigma,
+              0.05 * chain_sigma);
 }
 
 // Real stereo: the bundled KITTI excerpt (51 frames, 40 m) with the dead reckoning of a
