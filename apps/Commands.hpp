@@ -11,6 +11,7 @@
 #include "config/Config.hpp"
 #include "io/FrameSource.hpp"
 #include "io/RegistrationPreview.hpp"
+#include "mapper/GraphRun.hpp"
 #include "mapper/Mapper.hpp"
 #include "terrain/TerrainOptions.hpp"
 
@@ -72,9 +73,9 @@ int RunSimulate(const SimulateArgs& args);
 
 struct ReplayArgs {
   ConfigArgs config;
-  std::string sequence;  ///< sequence directory (docs/design.md §4) or ROS 1 bag
-  std::string out;       ///< output directory
-  bool force = false;    ///< write into a non-empty directory
+  std::string sequence;       ///< sequence directory (docs/design.md §4) or ROS 1 bag
+  std::string out;            ///< output directory
+  bool force = false;         ///< write into a non-empty directory
   std::string reference_dem;  ///< a reference DEM to match the rover's DEM against ("" = none)
 };
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args);
@@ -154,8 +155,9 @@ std::unique_ptr<io::FrameSource> OpenRecording(const std::string& path, const co
 
 struct ServeArgs {
   ConfigArgs config;
-  std::string inbox;  ///< inbox directory (docs/design.md §7)
-  std::string out;    ///< output directory (holds the checkpoint and the lock)
+  std::string inbox;          ///< inbox directory (docs/design.md §7)
+  std::string out;            ///< output directory (holds the checkpoint and the lock)
+  std::string reference_dem;  ///< reference DEM for the pose graph (empty: none)
 };
 CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args);
 /// Throws config::ConfigError / io::IoError / UsageError / mapper::DaemonBusyError; returns the
@@ -172,6 +174,8 @@ bool CheckOutputDirectory(const std::filesystem::path& out, bool force,
 /// The pipeline's options (mapper, registration, stereo, dem, octomap) out of a configuration:
 /// replay and serve run the same pipeline.
 mapper::PipelineOptions PipelineFrom(const config::Config& cfg);
+/// The options of the pose graph's sources (replay and serve).
+mapper::GraphSetup GraphSetupFrom(const config::Config& cfg);
 
 /// A command-line value that parses but makes no sense (exit 2).
 class UsageError : public std::runtime_error {

@@ -20,6 +20,7 @@
 #include "io/IoError.hpp"
 #include "io/ReferenceDem.hpp"
 #include "mapper/GnssGraph.hpp"
+#include "mapper/GraphRun.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ReadAhead.hpp"
 #include "service/DriftReport.hpp"
@@ -97,6 +98,10 @@ mapper::PipelineOptions PipelineFrom(const config::Config& cfg) {
   return {cfg.mapper, cfg.registration, cfg.stereo, cfg.dem, cfg.octomap, cfg.terrain};
 }
 
+mapper::GraphSetup GraphSetupFrom(const config::Config& cfg) {
+  return {cfg.graph, cfg.reference, cfg.revisit, cfg.registration, cfg.mapper};
+}
+
 CLI::App* AddReplayCommand(CLI::App* app, ReplayArgs* args) {
   CLI::App* cmd = app->add_subcommand(
       "replay",
@@ -141,7 +146,6 @@ int RunReplay(const ReplayArgs& args) {
   // The reference DEM: unusable (unreadable, another body, not under the traverse) is reported
   // and left out, unless reference.required.
   std::unique_ptr<io::ReferenceDem> reference;
-  std::unique_ptr<mapper::ReferenceTrack> track;
   std::string reference_unusable;
   if (!args.reference_dem.empty()) {
     try {
@@ -163,23 +167,19 @@ int RunReplay(const ReplayArgs& args) {
       reference_unusable = e.what();
       reference.reset();
     }
-    if (reference) {
-      track = std::make_unique<mapper::ReferenceTrack>(*reference, cfg.reference, cfg.registration);
-    } else {
+    if (!reference) {
       std::cerr << "replay: reference DEM left out (reference.required is false): "
                 << reference_unusable << "\n";
     }
   }
 
-  // Revisits: the recent ground matched onto the rover's own earlier ground (loop factors).
-  std::unique_ptr<mapper::RevisitTrack> revisit;
-  if (cfg.revisit.enabled && cfg.graph.enabled) {
-    try {
-      revisit =
-          std::make_unique<mapper::RevisitTrack>(cfg.revisit, cfg.reference, cfg.registration);
-    } catch (const std::invalid_argument& e) {
-      throw config::ConfigError(e.what());
-    }
+  // The graph's sources: the reference's matches and the revisits (loop factors), looked for
+  // after each frame.
+  std::unique_ptr<mapper::GraphRun> graph_run;
+  try {
+    graph_run = std::make_unique<mapper::GraphRun>(GraphSetupFrom(cfg), reference.get());
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError(e.what());
   }
 
   Progress progress(source->frame_count());
@@ -197,49 +197,20 @@ int RunReplay(const ReplayArgs& args) {
           mapper->SkipFrame(item.index, odom.timestamp, odom.T_world_body,
                             mapper::FallbackReason::kBadFrame, item.error, truth);
       progress.Frame(r, MsSince(start));
-      if (track) track->AfterFrame(*mapper, {});
-      if (revisit) revisit->AfterFrame(*mapper, {});
+      for (const std::string& line : graph_run->AfterFrame(*mapper, {}, "replay"))
+        std::cerr << line << "\n";
       continue;
     }
-    // The reference DEM's matches take the frame's own points (mapper/Patches).
+    // The reference DEM's matches and the revisits take the frame's own points (mapper/Patches).
     mapper::FrameBins bins;
-    if ((track || revisit) && item.prepared.loaded.ok) {
+    if (graph_run->wants_bins() && item.prepared.loaded.ok) {
       bins = mapper::BinFrame(item.prepared.Fused(), item.prepared.isolated.keep);
     }
     const mapper::FrameResult r =
         mapper->ProcessPrepared(*item.frame, std::move(item.prepared), item.load_ms);
     progress.Frame(r, MsSince(start));
-    if (track) {
-      if (const std::optional<mapper::ReferenceMatch> m = track->AfterFrame(*mapper, bins)) {
-        std::ostringstream line;
-        line << std::fixed << std::setprecision(2) << "replay: reference match, frames "
-             << m->first_frame << "-" << m->last_frame << ": ";
-        if (m->matched) {
-          line << "matched on frame " << m->frame << ", RMS " << std::setprecision(3)
-               << m->rms_before_m << " -> " << m->rms_after_m << " m, sigma x/y " << m->sigma_x_m
-               << "/" << m->sigma_y_m << " m, heading " << m->sigma_yaw_deg << " deg";
-        } else {
-          line << "refused: " << m->reason;
-        }
-        std::cerr << line.str() << "\n";
-      }
-    }
-    if (revisit) {
-      if (const std::optional<mapper::RevisitMatch> v = revisit->AfterFrame(*mapper, bins)) {
-        std::ostringstream line;
-        line << std::fixed << std::setprecision(3) << "replay: revisit, frames "
-             << v->match.first_frame << "-" << v->match.last_frame << " onto frame "
-             << v->from_frame << ": ";
-        if (v->match.matched) {
-          line << "matched on frame " << v->match.frame << ", RMS " << v->match.rms_before_m
-               << " -> " << v->match.rms_after_m << " m, sigma x/y " << v->match.sigma_x_m << "/"
-               << v->match.sigma_y_m << " m";
-        } else {
-          line << "refused: " << v->match.reason;
-        }
-        std::cerr << line.str() << "\n";
-      }
-    }
+    for (const std::string& line : graph_run->AfterFrame(*mapper, bins, "replay"))
+      std::cerr << line << "\n";
   }
   progress.Done();
 
@@ -247,17 +218,10 @@ int RunReplay(const ReplayArgs& args) {
   // are fused again from its poses (a second pass over the recording).
   std::optional<mapper::GraphOutcome> graph;
   try {
-    graph = mapper::SolveGraph(mapper->results(), source->info().sensor_type, source->gnss(),
-                               track ? track->matches() : std::vector<mapper::ReferenceMatch>{},
-                               revisit ? revisit->matches() : std::vector<mapper::RevisitMatch>{},
-                               mapper->georeference(), cfg.graph, cfg.mapper);
+    graph =
+        graph_run->Solve(*mapper, source->info().sensor_type, source->gnss(), reference_unusable);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
-  }
-  if (!args.reference_dem.empty() && !reference) {
-    // Reported in summary.json even without a graph.
-    if (!graph) graph.emplace();
-    graph->reference_unusable = reference_unusable;
   }
   if (graph &&
       (graph->fixes > 0 || !graph->reference_matches.empty() || !graph->revisits.empty())) {

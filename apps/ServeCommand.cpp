@@ -65,6 +65,9 @@ CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args) {
   cmd->add_option("--inbox", args->inbox, "Inbox directory (docs/design.md section 7)")->required();
   cmd->add_option("--out", args->out, "Output directory (created; holds the checkpoint)")
       ->required();
+  cmd->add_option("--reference-dem", args->reference_dem,
+                  "Reference DEM (any GeoTIFF GDAL reads, any CRS; band 2 its sigma) the rover's "
+                  "recent ground is matched against for the pose graph (docs/graph.md)");
   AddConfigOptions(cmd, &args->config);
   cmd->footer(
       "Takes frames/NNNNNN.* with NNNNNN.odom from the inbox in index order once complete,\n"
@@ -97,12 +100,16 @@ int RunServe(const ServeArgs& args) {
   setup.pipeline = PipelineFrom(cfg);
   setup.serve = cfg.serve;
   setup.eval = cfg.eval;
+  setup.graph = GraphSetupFrom(cfg);
+  setup.reference_dem = args.reference_dem;
   setup.config_text = config::DumpYaml(cfg);
   setup.log = [](const std::string& line) { std::cerr << line << "\n"; };
   setup.fault = FaultFromEnvironment();
   mapper::Daemon daemon(std::move(setup));
   try {
     if (!daemon.WaitForSequence(g_stop)) return kExitOk;
+  } catch (const mapper::ReferenceRequiredError& e) {
+    throw io::IoError(e.what());  // exit 1, as replay's
   } catch (const io::IoError& e) {
     throw UsageError(e.what());  // a bad sequence.yaml: exit 2 (docs/design.md §5, §7)
   } catch (const std::invalid_argument& e) {

@@ -6,7 +6,9 @@
 # of 10 m; a 1 m/post reference DEM of σ 0.2 m misplaced 0.5 m east, matched every 20 m; the
 # loop's revisits (laps after the first, from 300 m); all three.
 # One row per length and source: ATE (SE(3)-aligned) and final position error, the factors used
-# and rejected (refused), and the solve's time. 20 cm DEM cells (the table is about poses).
+# and rejected (refused), the frames within 2σ of the covariance the run states (the chain's,
+# or the graph's marginals), and the solve's time (with the covariance). 20 cm DEM cells (the
+# table is about poses).
 set -euo pipefail
 
 BUILD=build
@@ -30,8 +32,8 @@ final_error() {
     awk '{printf "%.3f", sqrt(($2-$10)^2 + ($3-$11)^2 + ($4-$12)^2)}'
 }
 
-printf "| length | source | ATE / final | used / rejected (refused) | solve |\n"
-printf "| ---: | --- | ---: | ---: | ---: |\n"
+printf "| length | source | ATE / final | used / rejected (refused) | within 2σ | solve |\n"
+printf "| ---: | --- | ---: | ---: | ---: | ---: |\n"
 for L in $LENGTHS; do
   frames=$((L / 2))
   seq="$W/seq_$L"
@@ -81,7 +83,9 @@ else:
     if source in ("revisit", "all"):
         parts.append(f"{g['revisits_used']} / {g['revisits_rejected']} ({g['revisits_refused']}) revisits")
     used, solve = ", ".join(parts), f"{g['solve_ms']:.0f} ms"
-print(f"| {L} m | {name} | {ate:.3f} / {final} m | {used} | {solve} |")
+u = s.get("pose_uncertainty")
+within = "" if source == "odometry" or u is None else f"{u['within_2sigma']:.3f}"
+print(f"| {L} m | {name} | {ate:.3f} / {final} m | {used} | {within} | {solve} |")
 PY
   done
 done

@@ -4,7 +4,9 @@
 #
 # Table 1: frames per second of `rovermap replay` and of `rovermap serve` (every frame already in
 # the inbox, so the daemon never waits; serve.publish_every 1 and 10) on the default simulated
-# stereo traverse and a cloud traverse, and on each --sequence given (a recorded one, e.g.
+# stereo traverse, a cloud traverse and a 300 m cloud loop with GNSS fixes (gnss.csv in the
+# inbox: serve solves the pose graph at each publication, replay once at the end and fuses its
+# maps again), and on each --sequence given (a recorded one, e.g.
 # datasets/kitti_stereo51), runs interleaved, medians. Serve's time runs from its
 # start until summary.json covers the last frame (its publishing and checkpoints included).
 # Table 2: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
@@ -38,6 +40,7 @@ make_inbox() {
   local seq=$1 inbox=$2 n=$3
   rm -rf "$inbox"; mkdir -p "$inbox/frames"
   cp "$seq/sequence.yaml" "$inbox/"
+  [[ -f "$seq/gnss.csv" ]] && cp "$seq/gnss.csv" "$inbox/"
   # awk reads to the end (head would leave grep a SIGPIPE, fatal under pipefail).
   awk -v n="$n" '!/^#/ && ++k <= n' "$seq/odometry.tum" | split -l 1 -d -a 6 - "$inbox/frames/x"
   for f in "$inbox"/frames/x*; do mv "$f" "$inbox/frames/${f##*/x}.odom"; done
@@ -76,12 +79,17 @@ serve_s() {
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
 "$R" simulate --out "$W/stereo" >/dev/null 2>&1
 "$R" simulate --out "$W/cloud" --set sim.sensor=cloud --set sim.cloud_stride_px=3 >/dev/null 2>&1
+"$R" simulate --out "$W/gnss" --set sim.sensor=cloud --set sim.frames=150 \
+  --set sim.frame_rate_hz=1 --set sim.speed_m_s=2 --set sim.terrain_size_m=400 \
+  --set sim.terrain_cell_m=0.2 --set sim.turn_radius_m=40 --set sim.path=loop \
+  --set sim.start_y_m=-40 --set sim.odom_scale_error=0.05 --set sim.gnss_every_frames=5 \
+  --set sim.gnss_outlier_fraction=0.05 >/dev/null 2>&1
 "$R" simulate --out "$W/long" --set sim.sensor=cloud --set sim.cloud_stride_px=3 \
   --set sim.frames="$LONG" --set sim.path=loop --set sim.terrain_size_m=60 >/dev/null 2>&1
 
 printf '\n%-30s %8s %10s %12s %12s %10s %10s\n' "sequence" "frames" "replay f/s" "serve p=1" \
   "serve p=10" "p=1/rep" "p=10/rep"
-for seq in "$W/stereo" "$W/cloud" ${SEQUENCES[@]+"${SEQUENCES[@]}"}; do
+for seq in "$W/stereo" "$W/cloud" "$W/gnss" ${SEQUENCES[@]+"${SEQUENCES[@]}"}; do
   case "$seq" in "$W/"*) name="sim ${seq##*/}" ;; *) name=${seq##*/} ;; esac
   n=$(frames_of "$seq")
   make_inbox "$seq" "$W/inbox" "$n"

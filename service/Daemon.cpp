@@ -94,6 +94,19 @@ bool Daemon::WaitForSequence(const std::atomic<int>& stop) {
   sequence_ = io::ReadSequenceInfo(inbox_.directory());
   sequence_text_ = io::ReadWholeFile(inbox_.sequence_yaml());
   mapper_ = std::make_unique<Mapper>(sequence_, setup_.pipeline);
+  if (!setup_.reference_dem.empty()) {
+    const ReferenceOptions& r = setup_.graph.reference;
+    try {
+      reference_ =
+          std::make_unique<io::ReferenceDem>(setup_.reference_dem, mapper_->georeference(),
+                                             io::ReferenceDemOptions{r.sigma_band, r.sigma_m});
+    } catch (const io::IoError& e) {
+      if (r.required) throw ReferenceRequiredError(e.what());
+      reference_unusable_ = e.what();
+      Log("serve: reference DEM left out (reference.required is false): " + reference_unusable_);
+    }
+  }
+  graph_run_ = std::make_unique<GraphRun>(setup_.graph, reference_.get());
   return true;
 }
 
@@ -120,6 +133,11 @@ void Daemon::Resume() {
          << " journalled steps re-applied) in " << std::fixed << std::setprecision(0) << restart_ms_
          << " ms";
     Log(line.str());
+    if (graph_run_->wants_bins()) {
+      Log("serve: reference matches and revisits start afresh at frame " +
+          std::to_string(state_.next_index) +
+          ": the ground mapped before the restart is not matched again (docs/graph.md)");
+    }
     since_checkpoint_ = static_cast<int>(checkpoint_->journal_records());
     // Rejections a kill interrupted: the reason is already there, move the rest.
     for (const auto& [index, present] : files) {
@@ -321,11 +339,17 @@ void Daemon::ProcessIndex(std::size_t index, const io::InboxFrameFiles& files,
     Log("serve: frame " + std::to_string(index) + " rejected, not in the trajectory: " + *no_pose);
     return;
   }
+  // The graph's matches take the frame's own points (mapper/Patches).
+  FrameBins bins;
+  if (!unreadable && graph_run_->wants_bins() && read.prepared.loaded.ok) {
+    bins = BinFrame(read.prepared.Fused(), read.prepared.isolated.keep);
+  }
   const FrameResult result =
       unreadable
           ? mapper_->SkipFrame(index, frame.timestamp, frame.T_world_body_odom,
                                FallbackReason::kBadFrame, *unreadable, frame.T_world_body_truth)
           : mapper_->ProcessPrepared(frame, std::move(read.prepared), read.load_ms);
+  for (const std::string& line : graph_run_->AfterFrame(*mapper_, bins, "serve")) Log(line);
   Fault("frame:processed");
   last_timestamp_ = frame.timestamp;
   const bool bad = result.status == FrameStatus::kBadFrame;
@@ -432,9 +456,43 @@ void Daemon::Publish() {
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
+  // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
+  // published trajectory is its own; the DEM stays the chain's until the next replay.
+  OutputState state(*mapper_);
+  const std::vector<io::GnssFix> fixes = InboxFixes();
+  try {
+    state.graph = graph_run_->Solve(*mapper_, sequence_.sensor_type, fixes, reference_unusable_);
+  } catch (const std::invalid_argument& e) {
+    Log(std::string("serve: pose graph not solved: ") + e.what());
+  }
+  if (state.graph && state.graph->solution.solved) {
+    const graph::PoseGraphResult& g = state.graph->solution;
+    std::ostringstream line;
+    line << "serve: pose graph over " << mapper_->results().size() << " frames: " << g.fixes_used
+         << " of " << state.graph->fixes << " GNSS fixes, " << g.poses_used
+         << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
+         << std::setprecision(0) << g.solve_ms << " ms";
+    Log(line.str());
+  }
   // The state is taken here, between frames; the files are written beside the next frames.
-  publisher_.Publish(setup_.out, OutputState(*mapper_), std::move(run), setup_.eval,
+  publisher_.Publish(setup_.out, std::move(state), std::move(run), setup_.eval,
                      [this](const std::string& file) { Fault("publish:" + file); });
+}
+
+std::vector<io::GnssFix> Daemon::InboxFixes() {
+  const fs::path path = inbox_.directory() / "gnss.csv";
+  std::error_code error;
+  if (!fs::exists(path, error)) return fixes_;
+  try {
+    fixes_ = io::ReadGnssCsv(path);
+    fixes_error_.clear();
+  } catch (const io::IoError& e) {
+    // Being appended to: a line cut short now is whole at the next publication.
+    if (e.what() != fixes_error_)
+      Log(std::string("serve: ") + e.what() + " (the fixes read before are kept)");
+    fixes_error_ = e.what();
+  }
+  return fixes_;
 }
 
 void Daemon::WriteStatus(const char* state, std::size_t waiting) {

@@ -18,12 +18,20 @@
 #include "core/TaskThread.hpp"
 #include "eval/EvalOptions.hpp"
 #include "io/Inbox.hpp"
+#include "io/ReferenceDem.hpp"
+#include "mapper/GraphRun.hpp"
 #include "mapper/Mapper.hpp"
 #include "mapper/ServeOptions.hpp"
 #include "service/Checkpoint.hpp"
 #include "service/OutputPublisher.hpp"
 
 namespace rovermap::mapper {
+
+/// The reference DEM given cannot be used and reference.required is set.
+class ReferenceRequiredError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 /// Another daemon holds the output directory's lock.
 class DaemonBusyError : public std::runtime_error {
@@ -37,6 +45,10 @@ struct DaemonSetup {
   PipelineOptions pipeline;
   ServeOptions serve;
   eval::EvalOptions eval;
+  /// The pose graph's sources (docs/graph.md): fixes from the inbox's gnss.csv, revisits, and
+  /// the reference DEM at `reference_dem` (empty: none), solved at each publication.
+  GraphSetup graph;
+  std::filesystem::path reference_dem;
   /// The effective configuration as text: with sequence.yaml, what a checkpoint must have been
   /// made with.
   std::string config_text;
@@ -56,9 +68,11 @@ class Daemon {
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  /// Waits for the inbox's sequence.yaml and reads it. @return false if `stop` turned non-zero
-  /// first. @throw io::IoError for an unreadable or invalid sequence.yaml (naming file and line);
-  /// std::invalid_argument for options the Mapper refuses.
+  /// Waits for the inbox's sequence.yaml and reads it, and opens the reference DEM (left out,
+  /// logged, when unusable). @return false if `stop` turned non-zero first. @throw io::IoError
+  /// for an unreadable or invalid sequence.yaml (naming file and line); std::invalid_argument
+  /// for options the Mapper refuses; ReferenceRequiredError for an unusable reference DEM with
+  /// reference.required.
   bool WaitForSequence(const std::atomic<int>& stop);
   /// Restores the checkpoint in OUT, if any (after WaitForSequence).
   /// @throw CheckpointError if it was made with another configuration or is damaged;
@@ -101,6 +115,9 @@ class Daemon {
   void Commit(const FrameResult* result, const std::string& reject_reason);
   void RejectLate(const FrameFiles& files);
   void Publish();
+  /// The fixes of the inbox's gnss.csv (none without it; the last readable ones while it is
+  /// being written and a line is broken).
+  std::vector<io::GnssFix> InboxFixes();
   void WriteStatus(const char* state, std::size_t waiting);
   void Log(const std::string& line) const {
     if (setup_.log) setup_.log(line);
@@ -115,6 +132,11 @@ class Daemon {
   io::SequenceInfo sequence_;
   std::string sequence_text_;
   std::unique_ptr<Mapper> mapper_;
+  std::unique_ptr<io::ReferenceDem> reference_;  // before graph_run_, which keeps a reference
+  std::string reference_unusable_;
+  std::unique_ptr<GraphRun> graph_run_;
+  std::vector<io::GnssFix> fixes_;
+  std::string fixes_error_;  // the last gnss.csv error logged
   std::unique_ptr<Checkpoint> checkpoint_;
   DaemonState state_;
   std::optional<Clock::time_point> gap_since_;

@@ -21,10 +21,16 @@
 #include <vector>
 
 #include "io/GeoTiff.hpp"
+#include "io/Georeference.hpp"
+#include "io/Gnss.hpp"
+#include "io/Sequence.hpp"
+#include "io/Tum.hpp"
+#include "tests/support/DriftCsv.hpp"
 #include "tests/support/ServeFixture.hpp"
 
 namespace fs = std::filesystem;
 using rovermap::testing::DataLines;
+using rovermap::testing::ReadCsv;
 using rovermap::testing::Slurp;
 
 namespace {
@@ -497,3 +503,73 @@ TEST_F(Serve, SigtermWhileWaitingForTheSequenceExitsZero) {
 }
 
 }  // namespace
+
+// GNSS fixes in the inbox's gnss.csv (docs/graph.md): every publication solves the pose graph
+// over the frames so far; the published trajectory is the graph's, as replay's of the same
+// sequence, and the chain's is kept beside it. A gnss.csv caught half-written is logged and its
+// earlier fixes kept; the daemon goes on.
+TEST_F(Serve, GnssFixesInTheInboxGiveTheGraphsTrajectory) {
+  const auto truth = rovermap::io::ReadTum(kTinyCloud / "groundtruth.tum");
+  const rovermap::io::Georeference georef(rovermap::io::ReadSequenceInfo(kTinyCloud).origin);
+  std::vector<rovermap::io::GnssFix> fixes;
+  for (std::size_t k = 0; k < truth.size(); ++k) {
+    const Eigen::Vector3d p = truth[k].T_world_body.translation() +
+                              0.02 * Eigen::Vector3d(std::sin(3.0 * k), std::cos(5.0 * k), 0.0);
+    const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
+    rovermap::io::GnssFix f;
+    f.timestamp = truth[k].timestamp;
+    f.latitude_deg = geo.x();
+    f.longitude_deg = geo.y();
+    f.altitude_m = geo.z();
+    f.sigma_enu_m = Eigen::Vector3d::Constant(0.02);
+    fixes.push_back(f);
+  }
+  const fs::path seq = dir_ / "seq";
+  fs::copy(kTinyCloud, seq, fs::copy_options::recursive);
+  rovermap::io::WriteGnssCsv(seq / "gnss.csv", fixes);
+  const fs::path replay = Replay(seq);
+
+  const fs::path inbox = MakeInbox(seq, 0, "inbox");
+  // Being written: the header and half a line.
+  Drop(inbox / "gnss.csv", std::string(rovermap::io::kGnssCsvHeader) + "\n0.0,46.5\n");
+  const fs::path out = dir_ / "out";
+  const pid_t pid = Start(inbox, out, "log");
+  for (std::size_t k = 0; k < truth.size(); ++k) DropFrame(seq, inbox, k);
+  ASSERT_FALSE(WaitForNext(out, truth.size()).is_null()) << Slurp(dir_ / "log");
+  Drop(inbox / "gnss.csv", Slurp(seq / "gnss.csv"));
+  Stop(pid);  // the last publication reads the whole file
+  const std::string log = Slurp(dir_ / "log");
+  EXPECT_NE(log.find("gnss.csv"), std::string::npos) << log;
+  EXPECT_NE(log.find("(the fixes read before are kept)"), std::string::npos) << log;
+  EXPECT_NE(log.find("serve: pose graph over 5 frames: 5 of 5 GNSS fixes"), std::string::npos)
+      << log;
+  const nlohmann::json summary = nlohmann::json::parse(Slurp(out / "summary.json"));
+  ASSERT_TRUE(summary.contains("graph")) << summary.dump(2);
+  EXPECT_TRUE(summary["graph"]["solved"].get<bool>());
+  EXPECT_EQ(summary["graph"]["gnss_used"], 5);
+  EXPECT_EQ(Slurp(out / "trajectory.tum"), Slurp(replay / "trajectory.tum"));
+  EXPECT_EQ(Slurp(out / "trajectory_f2f.tum"), Slurp(replay / "trajectory_f2f.tum"));
+  EXPECT_EQ(ReadCsv(out / "drift.csv").back().at("gnss"), "used");
+}
+
+// A reference DEM that cannot be read: logged and left out, the daemon goes on; with
+// reference.required it stops at its start (exit 1), naming the file.
+TEST_F(Serve, AnUnusableReferenceDemIsLeftOutOrStopsTheStartWhenRequired) {
+  const fs::path inbox = MakeInbox(kTinyCloud, 2, "inbox");
+  const fs::path missing = dir_ / "no_such_reference.tif";
+  const fs::path out = dir_ / "out";
+  const pid_t pid = Start(inbox, out, "log", {"--reference-dem", missing.string()});
+  ASSERT_FALSE(WaitForNext(out, 2).is_null()) << Slurp(dir_ / "log");
+  Stop(pid);
+  const std::string log = Slurp(dir_ / "log");
+  EXPECT_NE(log.find("serve: reference DEM left out (reference.required is false): "),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find(missing.string()), std::string::npos) << log;
+  const pid_t required =
+      Start(inbox, dir_ / "out_required", "log_required",
+            {"--reference-dem", missing.string(), "--set", "reference.required=true"});
+  EXPECT_EQ(WaitExit(required), 1);
+  EXPECT_NE(Slurp(dir_ / "log_required").find(missing.string()), std::string::npos)
+      << Slurp(dir_ / "log_required");
+}

@@ -1,0 +1,65 @@
+#pragma once
+// The pose graph's sources over one run (docs/graph.md), as replay and serve both keep them: a
+// reference DEM's matches and the revisits, looked for after each frame, and the graph solved
+// with them and the GNSS fixes when asked (at the end of a replay, at each publication of serve).
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/Gnss.hpp"
+#include "io/ReferenceDem.hpp"
+#include "mapper/GnssGraph.hpp"
+#include "mapper/GraphOptions.hpp"
+#include "mapper/Patches.hpp"
+#include "mapper/ReferenceMatch.hpp"
+#include "mapper/ReferenceOptions.hpp"
+#include "mapper/Revisit.hpp"
+#include "registration/Options.hpp"
+
+namespace rovermap::mapper {
+
+class Mapper;
+
+/// The options the graph's sources read (the `graph.`, `reference.`, `revisit.` keys).
+struct GraphSetup {
+  GraphOptions graph;
+  ReferenceOptions reference;
+  RevisitOptions revisit;
+  registration::RegistrationOptions registration;
+  MapperOptions mapper;
+};
+
+class GraphRun {
+ public:
+  /// `reference`: the reference DEM to match against (nullptr: none); kept, must outlive this.
+  /// Revisits are looked for when revisit.enabled and graph.enabled.
+  /// @throw std::invalid_argument naming the key if an option is out of range.
+  GraphRun(const GraphSetup& setup, const io::ReferenceDem* reference);
+
+  /// Whether AfterFrame wants each frame's bins (a reference or revisits are looked for).
+  bool wants_bins() const { return track_ != nullptr || revisit_ != nullptr; }
+  /// After each frame the mapper took (its points binned by BinFrame, empty when it was not
+  /// fused): the lines to log, one per match or look made, each starting with `who` + ": ".
+  std::vector<std::string> AfterFrame(const Mapper& mapper, const FrameBins& bins,
+                                      const std::string& who);
+  /// Whether anything was found since the last Solve (a match, a look) or `fixes` differ in
+  /// number from that solve's.
+  bool Changed(std::size_t fixes) const;
+  /// SolveGraph over the mapper's results with `fixes` and what the tracks found; the
+  /// reference that was given but left out is named in the outcome (`reference_unusable`).
+  /// @throw std::invalid_argument if the options are invalid.
+  std::optional<GraphOutcome> Solve(const Mapper& mapper, io::SensorType sensor,
+                                    const std::vector<io::GnssFix>& fixes,
+                                    const std::string& reference_unusable = "");
+
+ private:
+  GraphSetup setup_;
+  std::unique_ptr<ReferenceTrack> track_;
+  std::unique_ptr<RevisitTrack> revisit_;
+  std::size_t solved_matches_ = 0, solved_looks_ = 0, solved_fixes_ = 0;
+  bool solved_once_ = false;
+};
+
+}  // namespace rovermap::mapper
