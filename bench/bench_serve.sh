@@ -9,7 +9,9 @@
 # maps again), and on each --sequence given (a recorded one, e.g.
 # datasets/kitti_stereo51), runs interleaved, medians. Serve's time runs from its
 # start until summary.json covers the last frame (its publishing and checkpoints included).
-# Table 2: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
+# Table 2: the pose graph's share of serve's time: serve (publish_every 10) on the GNSS loop with
+# the graph on (solved at each publication over its last serve.graph_window_frames) and off.
+# Table 3: the restart time after 100 and N (default 500) frames of a cloud loop, killed with
 # -9 in the middle of the snapshot at that frame, so that the last checkpoint_every (10) frames
 # must be re-applied from the journal: the worst case; against replaying those frames.
 set -euo pipefail
@@ -106,6 +108,21 @@ for seq in "$W/stereo" "$W/cloud" "$W/gnss" ${SEQUENCES[@]+"${SEQUENCES[@]}"}; d
     "$(calc "$n / $r")" "$(calc "$n / $a")" "$(calc "$n / $b")" \
     "$(calc "$r / $a")" "$(calc "$r / $b")"
 done
+
+printf '\n%-30s %8s %14s %14s %10s\n' "pose graph in serve" "frames" "graph off f/s" \
+  "graph on f/s" "on/off"
+n=$(frames_of "$W/gnss")
+make_inbox "$W/gnss" "$W/inbox" "$n"
+off=(); on=()
+for ((i = 0; i < RUNS; i++)); do
+  off+=("$(serve_s "$W/inbox" "$n" --set graph.enabled=false)")
+  on+=("$(serve_s "$W/inbox" "$n")")
+done
+a=$(printf '%s\n' "${off[@]}" | median)
+b=$(printf '%s\n' "${on[@]}" | median)
+printf '%-30s %8d %14.2f %14.2f %10.2f\n' "sim gnss loop, p=10" "$n" "$(calc "$n / $a")" \
+  "$(calc "$n / $b")" "$(calc "$a / $b")"
+grep -o 'pose graph over [0-9]* frames.*ms' "$W/serve.log" | tail -1 | sed 's/^/last solve: /'
 
 printf '\n%-30s %10s %14s %14s %16s\n' "restart after" "frames" "restart [ms]" "snapshot [MB]" \
   "replay them [s]"

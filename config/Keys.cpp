@@ -483,6 +483,8 @@ std::vector<KeyEntry> BuildRegistry() {
             "a ready frame further than this beyond the next expected is rejected");
   serve.Int("publish_every", &V::publish_every, "frames", AtLeast(1),
             "publish the outputs after this many frames (and when idle, and on exit)");
+  serve.Int("graph_window_frames", &V::graph_window_frames, "frames", AtLeast(0),
+            "the pose graph solved over this many last frames at each publication; 0 = all");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),
             "snapshot the state after this many frames (each is journalled)");
   serve.Double("checkpoint_share", &V::checkpoint_share, "fraction", Bounds{0, false, 1, false},

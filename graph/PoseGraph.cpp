@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/Skew.hpp"
+
 namespace rovermap::graph {
 namespace {
 
@@ -224,6 +226,15 @@ double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
   return (sqrt_information * (T * f.lever_arm_body - f.position_world)).squaredNorm();
 }
 
+// [[R, 0], [[t]×R, R]]: a right perturbation of T as a left one (RegistrationResult's order).
+Matrix6d Adjoint(const Eigen::Isometry3d& T) {
+  Matrix6d A = Matrix6d::Zero();
+  A.topLeftCorner<3, 3>() = T.linear();
+  A.bottomLeftCorner<3, 3>() = core::Skew(T.translation()) * T.linear();
+  A.bottomRightCorner<3, 3>() = T.linear();
+  return A;
+}
+
 // Every node's marginal covariance at the solution of `problem`; given node 0 (held constant)
 // when `given_first`.
 // Ceres's tangent of an EigenQuaternionManifold block is δ with q' = [cos|δ|, sin|δ| δ/|δ|] ⊗ q:
@@ -231,10 +242,10 @@ double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
 // translation. The chain's convention is a right perturbation in the body frame, (Exp(ξr), ξt)
 // applied after T: ξr = Rᵀ·2δ, ξt = Rᵀ·δt.
 void MarginalCovariances(ceres::Problem* problem, std::vector<Node>* nodes, bool given_first,
-                         PoseGraphResult* result) {
+                         std::size_t first_free, PoseGraphResult* result) {
   const auto start = std::chrono::steady_clock::now();
-  const std::size_t first = given_first ? 1 : 0;
-  if (given_first) {
+  const std::size_t first = std::max<std::size_t>(given_first ? 1 : 0, first_free);
+  if (given_first && first_free == 0) {
     problem->SetParameterBlockConstant((*nodes)[0].q);
     problem->SetParameterBlockConstant((*nodes)[0].t);
   }
@@ -358,6 +369,11 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   result.loop_chi2.assign(loops.size(), 0.0);
   const bool any_gated =
       std::any_of(poses.begin(), poses.end(), [](const PoseFactor& f) { return f.gated; });
+  if (n > 0 && options.first_free_node >= n) {
+    throw std::invalid_argument("graph: first_free_node " +
+                                std::to_string(options.first_free_node) +
+                                " holds every one of the " + std::to_string(n) + " nodes");
+  }
   if ((positions.empty() && !any_gated && loops.empty()) || n == 0) {
     result.message = "no absolute factor: the chained trajectory is kept";
     return result;
@@ -390,6 +406,14 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   prior_L.diagonal() << Eigen::Vector3d::Constant(1.0 / (options.first_pose_sigma_deg * kDegToRad)),
       Eigen::Vector3d::Constant(1.0 / options.first_pose_sigma_m);
 
+  // The held part's prior on a window's first node: the chain's convention (a right
+  // perturbation) as the left one PriorCost weighs, Ad(T) Σ Ad(T)ᵀ.
+  Matrix6d held_L = Matrix6d::Zero();
+  if (options.first_free_node > 0) {
+    const Matrix6d A = Adjoint(initial[options.first_free_node]);
+    held_L =
+        SqrtInformation<6>(Matrix6d(A * options.held_covariance * A.transpose()), increment_floor);
+  }
   std::vector<bool> use(positions.size(), true);
   std::vector<bool> use_pose(poses.size(), true);
   std::vector<bool> use_loop(loops.size(), true);
@@ -402,18 +426,27 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
     nodes.clear();
     for (const Eigen::Isometry3d& T : result.T_world_body) nodes.push_back(ToNode(T));
     ceres::Problem problem;
-    for (Node& node : nodes) {
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      Node& node = nodes[k];
       problem.AddParameterBlock(node.q, 4, new ceres::EigenQuaternionManifold);
       problem.AddParameterBlock(node.t, 3);
+      if (k < options.first_free_node) {
+        problem.SetParameterBlockConstant(node.q);
+        problem.SetParameterBlockConstant(node.t);
+      }
     }
-    const Node first = ToNode(initial.front());
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(
-            new PriorCost{{Eigen::Quaterniond(first.q[3], first.q[0], first.q[1], first.q[2]),
-                           initial.front().translation(), prior_L}}),
-        nullptr, nodes.front().q, nodes.front().t);
+    // The start: frame 0's weak prior, or in a window the held part summed up as a prior on
+    // the window's first node (where the last solution put it, with its covariance), in place
+    // of the increment that ties it to the held nodes.
+    const std::size_t start_node = options.first_free_node;
+    const Eigen::Isometry3d& start_pose = initial[start_node];
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost{
+                                 {Eigen::Quaterniond(start_pose.linear()).normalized(),
+                                  start_pose.translation(), start_node == 0 ? prior_L : held_L}}),
+                             nullptr, nodes[start_node].q, nodes[start_node].t);
     for (std::size_t k = 0; k < relative.size(); ++k) {
       const RelativeFactor& f = relative[k];
+      if (start_node > 0 && f.to <= start_node && f.from <= start_node) continue;
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<RelativeCost, 6, 4, 3, 4, 3>(
               new RelativeCost{{Eigen::Quaterniond(f.T_from_to.linear()).normalized(),
@@ -557,10 +590,13 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
       for (std::size_t k = 0; k < positions.size(); ++k) absolute = absolute || use[k];
       for (std::size_t k = 0; k < poses.size(); ++k)
         absolute = absolute || (use_pose[k] && poses[k].gated);
-      if (options.covariance) MarginalCovariances(&problem, &nodes, !absolute, &result);
+      if (options.covariance) {
+        MarginalCovariances(&problem, &nodes, !absolute, options.first_free_node, &result);
+      }
       break;
     }
   }
+  result.first_solved_frame = options.first_free_node;
   if (!options.covariance) result.covariance_message = "not asked for";
   if (!result.solved) result.covariance_message = "the graph was not solved";
   result.fixes_used = 0;

@@ -44,6 +44,16 @@ struct PoseGraphOptions {
   double xy_offset_sigma_m = 1.0;
   /// Compute every node's marginal covariance at the solution (PoseGraphResult::covariance).
   bool covariance = true;
+  /// Nodes before this one are held where `initial` puts them (a daemon's earlier solution):
+  /// the solve's cost stays with the window from it on. The window's first node gets a prior
+  /// at its `initial` pose with `held_covariance` in place of its increment from the held
+  /// nodes (the held part summed up, as a marginalised past) and of frame 0's prior; factors
+  /// from held nodes into the window (a revisit of old ground) tie it to them as they are.
+  /// 0: every node is free.
+  std::size_t first_free_node = 0;
+  /// That prior's covariance (the chain's convention: the last solution's marginal of the
+  /// window's first node).
+  Matrix6d held_covariance = Matrix6d::Zero();
 };
 
 /// @throw std::invalid_argument naming the field if a value is out of range.
@@ -137,9 +147,12 @@ struct PoseGraphResult {
   /// [rx ry rz tx ty tz]), robust losses applied as at the solution. Against the world when a
   /// position or gated pose factor is used; with loop factors alone given node 0 (zero there,
   /// as the chain's: nothing absolute places the start). Empty when not computed;
-  /// covariance_message then says why.
+  /// covariance_message then says why. With PoseGraphOptions::first_free_node, zero for the
+  /// held nodes (the caller has theirs).
   std::vector<Matrix6d> covariance;
   bool covariance_given_first = false;
+  /// PoseGraphOptions::first_free_node: the nodes before it were held.
+  std::size_t first_solved_frame = 0;
   std::string covariance_message;
   double covariance_ms = 0.0;
 };

@@ -55,7 +55,8 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                        const std::vector<RevisitMatch>& revisits,
                                        const io::Georeference& georeference,
                                        const GraphOptions& options,
-                                       const MapperOptions& mapper_options) {
+                                       const MapperOptions& mapper_options,
+                                       const GraphOutcome* previous, std::size_t window_frames) {
   // A fix or two (a bag's origin fix) are no track to hold the trajectory to; one reference
   // match is (it holds heading as well as position).
   const bool enough_fixes =
@@ -137,6 +138,25 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   std::vector<Eigen::Isometry3d> initial;
   initial.reserve(results.size());
   for (const FrameResult& r : results) initial.push_back(r.step.T_world_body);
+  // A window: the frames before it where the last solve put them (and the frames after that
+  // solve chained onto its last pose), only the window solved.
+  const graph::PoseGraphResult* held = nullptr;
+  if (previous != nullptr && window_frames > 0 && results.size() > window_frames) {
+    const graph::PoseGraphResult& p = previous->solution;
+    const std::size_t first_free = results.size() - window_frames;
+    if (p.solved && p.covariance.size() == p.T_world_body.size() &&
+        p.T_world_body.size() > first_free && p.T_world_body.size() <= results.size()) {
+      held = &p;
+      for (std::size_t k = 0; k < p.T_world_body.size(); ++k) initial[k] = p.T_world_body[k];
+      for (std::size_t k = p.T_world_body.size(); k < results.size(); ++k) {
+        initial[k] = initial[k - 1] *
+                     (results[k - 1].step.T_world_body.inverse() * results[k].step.T_world_body);
+      }
+      solver.first_free_node = first_free;
+      solver.held_covariance = p.covariance[first_free];
+      solver.covariance = true;  // the window's: its cost is the window's
+    }
+  }
   // The chain's own roll and pitch, with its σ, as priors: fixes and reference matches hold
   // position and heading, not the tilt, and without them the graph bought a shorter
   // horizontal path (a drifting scale) with a tilted one (10° over a 300 m loop, z metres off).
@@ -165,6 +185,9 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                       " (the chain's is reported)";
   }
   std::vector<graph::Matrix6d>& covariance = out.solution.covariance;
+  if (held != nullptr && covariance.size() == results.size()) {
+    for (std::size_t k = 0; k < solver.first_free_node; ++k) covariance[k] = held->covariance[k];
+  }
   for (std::size_t k = 0; k < covariance.size() && k < results.size(); ++k) {
     graph::Matrix6d S = graph::Matrix6d::Identity();
     for (int axis = 0; axis < 2; ++axis) {

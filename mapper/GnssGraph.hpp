@@ -75,15 +75,17 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
 /// factors). nullopt when the graph is off, or there are fewer fixes than
 /// GraphOptions::min_gnss_fixes (a bag's single origin fix is no track) and no match or
 /// revisit at all. A reference match holds position and heading, a revisit the two passes
-/// together: one is enough.
+/// together: one is enough. With `previous` (an earlier solve of the same run, solved with its
+/// covariance) and `window_frames` > 0, the frames before the last `window_frames` are held
+/// where `previous` put them, with its covariance, and only the window is solved (a daemon's
+/// bounded solve; graph::PoseGraphOptions::first_free_node).
 /// @throw std::invalid_argument if the options are invalid.
-std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
-                                       io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
-                                       const std::vector<ReferenceMatch>& matches,
-                                       const std::vector<RevisitMatch>& revisits,
-                                       const io::Georeference& georeference,
-                                       const GraphOptions& options,
-                                       const MapperOptions& mapper_options);
+std::optional<GraphOutcome> SolveGraph(
+    const std::vector<FrameResult>& results, io::SensorType sensor,
+    const std::vector<io::GnssFix>& fixes, const std::vector<ReferenceMatch>& matches,
+    const std::vector<RevisitMatch>& revisits, const io::Georeference& georeference,
+    const GraphOptions& options, const MapperOptions& mapper_options,
+    const GraphOutcome* previous = nullptr, std::size_t window_frames = 0);
 
 /// Empties `mapper`'s DEM and OctoMap and fuses every frame it fused before again, read anew
 /// from `source` (random access), at `T_world_body` (one per result) with `covariance` (the

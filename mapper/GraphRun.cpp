@@ -55,24 +55,15 @@ std::vector<std::string> GraphRun::AfterFrame(const Mapper& mapper, const FrameB
   return lines;
 }
 
-bool GraphRun::Changed(std::size_t fixes) const {
-  const std::size_t matches = track_ ? track_->matches().size() : 0;
-  const std::size_t looks = revisit_ ? revisit_->matches().size() : 0;
-  return !solved_once_ || matches != solved_matches_ || looks != solved_looks_ ||
-         fixes != solved_fixes_;
-}
-
 std::optional<GraphOutcome> GraphRun::Solve(const Mapper& mapper, io::SensorType sensor,
                                             const std::vector<io::GnssFix>& fixes,
-                                            const std::string& reference_unusable) {
-  solved_once_ = true;
-  solved_matches_ = track_ ? track_->matches().size() : 0;
-  solved_looks_ = revisit_ ? revisit_->matches().size() : 0;
-  solved_fixes_ = fixes.size();
+                                            const std::string& reference_unusable,
+                                            std::size_t window_frames) {
   std::optional<GraphOutcome> graph = SolveGraph(
       mapper.results(), sensor, fixes, track_ ? track_->matches() : std::vector<ReferenceMatch>{},
       revisit_ ? revisit_->matches() : std::vector<RevisitMatch>{}, mapper.georeference(),
-      setup_.graph, setup_.mapper);
+      setup_.graph, setup_.mapper, last_ ? &*last_ : nullptr, window_frames);
+  last_ = graph;
   if (!reference_unusable.empty()) {
     // Reported in summary.json even without a graph.
     if (!graph) graph.emplace();

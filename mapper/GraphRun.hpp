@@ -44,22 +44,22 @@ class GraphRun {
   /// fused): the lines to log, one per match or look made, each starting with `who` + ": ".
   std::vector<std::string> AfterFrame(const Mapper& mapper, const FrameBins& bins,
                                       const std::string& who);
-  /// Whether anything was found since the last Solve (a match, a look) or `fixes` differ in
-  /// number from that solve's.
-  bool Changed(std::size_t fixes) const;
   /// SolveGraph over the mapper's results with `fixes` and what the tracks found; the
   /// reference that was given but left out is named in the outcome (`reference_unusable`).
+  /// `window_frames` > 0: only the last so many frames are solved, the others held where the
+  /// last Solve put them (a daemon's bounded solve; the first solves, and any after one that
+  /// was not solved, are whole).
   /// @throw std::invalid_argument if the options are invalid.
   std::optional<GraphOutcome> Solve(const Mapper& mapper, io::SensorType sensor,
                                     const std::vector<io::GnssFix>& fixes,
-                                    const std::string& reference_unusable = "");
+                                    const std::string& reference_unusable = "",
+                                    std::size_t window_frames = 0);
 
  private:
   GraphSetup setup_;
   std::unique_ptr<ReferenceTrack> track_;
   std::unique_ptr<RevisitTrack> revisit_;
-  std::size_t solved_matches_ = 0, solved_looks_ = 0, solved_fixes_ = 0;
-  bool solved_once_ = false;
+  std::optional<GraphOutcome> last_;
 };
 
 }  // namespace rovermap::mapper

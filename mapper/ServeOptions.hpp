@@ -18,6 +18,10 @@ struct ServeOptions {
   /// [frames] publish the outputs (docs/design.md §6) after this many frames, when the queue
   /// runs dry with frames done since the last publication, and on exit.
   int publish_every = 10;
+  /// [frames] the pose graph solved at each publication over this many last frames, the
+  /// earlier ones held where the last solve put them (bounded time per publication); 0 =
+  /// every frame each time.
+  int graph_window_frames = 200;
   /// [frames] snapshot the state after this many frames (each frame is journalled anyway, so a
   /// restart never registers a frame twice; a larger value writes less, and a restart re-fuses
   /// up to this many frames).

@@ -461,15 +461,18 @@ void Daemon::Publish() {
   OutputState state(*mapper_);
   const std::vector<io::GnssFix> fixes = InboxFixes();
   try {
-    state.graph = graph_run_->Solve(*mapper_, sequence_.sensor_type, fixes, reference_unusable_);
+    state.graph =
+        graph_run_->Solve(*mapper_, sequence_.sensor_type, fixes, reference_unusable_,
+                          static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
   } catch (const std::invalid_argument& e) {
     Log(std::string("serve: pose graph not solved: ") + e.what());
   }
   if (state.graph && state.graph->solution.solved) {
     const graph::PoseGraphResult& g = state.graph->solution;
     std::ostringstream line;
-    line << "serve: pose graph over " << mapper_->results().size() << " frames: " << g.fixes_used
-         << " of " << state.graph->fixes << " GNSS fixes, " << g.poses_used
+    line << "serve: pose graph over " << mapper_->results().size() << " frames";
+    if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
+    line << ": " << g.fixes_used << " of " << state.graph->fixes << " GNSS fixes, " << g.poses_used
          << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
          << std::setprecision(0) << g.solve_ms << " ms";
     Log(line.str());

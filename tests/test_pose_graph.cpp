@@ -417,3 +417,35 @@ TEST(PoseGraph, MarginalCovarianceHoldsTheTruthAsOftenAsItSays) {
   EXPECT_LT(nees_sum / static_cast<double>(count), 9.0);
   EXPECT_GT(nees_sum / static_cast<double>(count), 3.0);
 }
+
+// A window (a daemon's bounded solve): the nodes before PoseGraphOptions::first_free_node held
+// at the full solution, the window's first node held by its marginal, leave the free nodes near
+// the full solution, with a covariance near the full graph's marginal.
+TEST(PoseGraph, AWindowAfterHeldNodesKeepsTheFullSolutionAndItsUncertainty) {
+  const Traverse t = MakeTraverse();
+  const auto fixes = Fixes(t, 0.3, 20, 3);
+  const graph::PoseGraphResult full =
+      graph::SolvePoseGraph(t.chained, t.relative, fixes, graph::PoseGraphOptions{});
+  ASSERT_TRUE(full.solved) << full.message;
+  ASSERT_EQ(full.covariance.size(), t.truth.size());
+  graph::PoseGraphOptions options;
+  options.first_free_node = 150;
+  options.held_covariance = full.covariance[150];
+  const graph::PoseGraphResult window =
+      graph::SolvePoseGraph(full.T_world_body, t.relative, fixes, options);
+  ASSERT_TRUE(window.solved) << window.message;
+  // The window's first node is held by the full graph's marginal, which already counts the
+  // window's own fixes: counted twice, they move the window by centimetres (fixes of σ 0.3 m).
+  EXPECT_LT(MaxPositionError(window.T_world_body, full.T_world_body), 0.15);
+  for (std::size_t k = 0; k < 150; ++k) EXPECT_TRUE(window.covariance[k].isZero()) << k;
+  for (std::size_t k = 150; k < t.truth.size(); k += 10) {
+    const double ratio = window.covariance[k].bottomRightCorner<3, 3>().trace() /
+                         full.covariance[k].bottomRightCorner<3, 3>().trace();
+    std::printf("node %zu: window / full position variance %.2f\n", k, ratio);
+    EXPECT_GT(ratio, 0.5) << k;
+    EXPECT_LT(ratio, 1.5) << k;
+  }
+  options.first_free_node = t.truth.size();
+  EXPECT_THROW(graph::SolvePoseGraph(full.T_world_body, t.relative, fixes, options),
+               std::invalid_argument);
+}

@@ -550,6 +550,26 @@ TEST_F(Serve, GnssFixesInTheInboxGiveTheGraphsTrajectory) {
   EXPECT_EQ(Slurp(out / "trajectory.tum"), Slurp(replay / "trajectory.tum"));
   EXPECT_EQ(Slurp(out / "trajectory_f2f.tum"), Slurp(replay / "trajectory_f2f.tum"));
   EXPECT_EQ(ReadCsv(out / "drift.csv").back().at("gnss"), "used");
+
+  // A window of 2 frames (serve.graph_window_frames), published after every frame: the later
+  // solves hold the earlier frames where the last one put them and solve the last two; the
+  // trajectory stays within millimetres of the whole graph's (fixes of 2 cm).
+  const fs::path windowed = dir_ / "windowed";
+  const pid_t w = Start(inbox, windowed, "log_window",
+                        {"--set", "serve.graph_window_frames=2", "--set", "serve.publish_every=1"});
+  ASSERT_FALSE(WaitForNext(windowed, truth.size()).is_null()) << Slurp(dir_ / "log_window");
+  Stop(w);
+  const std::string wlog = Slurp(dir_ / "log_window");
+  EXPECT_NE(wlog.find("serve: pose graph over 5 frames (frames 3- solved)"), std::string::npos)
+      << wlog;
+  const auto whole = rovermap::io::ReadTum(replay / "trajectory.tum");
+  const auto part = rovermap::io::ReadTum(windowed / "trajectory.tum");
+  ASSERT_EQ(part.size(), whole.size());
+  for (std::size_t k = 0; k < whole.size(); ++k) {
+    EXPECT_LT((part[k].T_world_body.translation() - whole[k].T_world_body.translation()).norm(),
+              0.01)
+        << k;
+  }
 }
 
 // A reference DEM that cannot be read: logged and left out, the daemon goes on; with
