@@ -144,8 +144,7 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   if (previous != nullptr && window_frames > 0 && results.size() > window_frames) {
     const graph::PoseGraphResult& p = previous->solution;
     const std::size_t first_free = results.size() - window_frames;
-    if (p.solved && p.covariance.size() == p.T_world_body.size() &&
-        p.T_world_body.size() > first_free && p.T_world_body.size() <= results.size()) {
+    if (p.solved && p.T_world_body.size() > first_free && p.T_world_body.size() <= results.size()) {
       held = &p;
       for (std::size_t k = 0; k < p.T_world_body.size(); ++k) initial[k] = p.T_world_body[k];
       for (std::size_t k = p.T_world_body.size(); k < results.size(); ++k) {
@@ -153,7 +152,11 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                      (results[k - 1].step.T_world_body.inverse() * results[k].step.T_world_body);
       }
       solver.first_free_node = first_free;
-      solver.held_covariance = p.covariance[first_free];
+      // Its covariance, or the chain's where it had none (a whole solve beyond
+      // graph.covariance_max_frames, as after a daemon's restart late in a run).
+      solver.held_covariance = first_free < p.covariance.size()
+                                   ? p.covariance[first_free]
+                                   : results[first_free].step.covariance;
       solver.covariance = true;  // the window's: its cost is the window's
     }
   }
@@ -186,7 +189,10 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   }
   std::vector<graph::Matrix6d>& covariance = out.solution.covariance;
   if (held != nullptr && covariance.size() == results.size()) {
-    for (std::size_t k = 0; k < solver.first_free_node; ++k) covariance[k] = held->covariance[k];
+    for (std::size_t k = 0; k < solver.first_free_node; ++k) {
+      covariance[k] =
+          k < held->covariance.size() ? held->covariance[k] : results[k].step.covariance;
+    }
   }
   for (std::size_t k = 0; k < covariance.size() && k < results.size(); ++k) {
     graph::Matrix6d S = graph::Matrix6d::Identity();
