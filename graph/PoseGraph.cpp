@@ -226,15 +226,6 @@ double FixChi2(const PositionFactor& f, const Eigen::Matrix3d& sqrt_information,
   return (sqrt_information * (T * f.lever_arm_body - f.position_world)).squaredNorm();
 }
 
-// [[R, 0], [[t]×R, R]]: a right perturbation of T as a left one (RegistrationResult's order).
-Matrix6d Adjoint(const Eigen::Isometry3d& T) {
-  Matrix6d A = Matrix6d::Zero();
-  A.topLeftCorner<3, 3>() = T.linear();
-  A.bottomLeftCorner<3, 3>() = core::Skew(T.translation()) * T.linear();
-  A.bottomRightCorner<3, 3>() = T.linear();
-  return A;
-}
-
 // Every node's marginal covariance at the solution of `problem`; given node 0 (held constant)
 // when `given_first`.
 // Ceres's tangent of an EigenQuaternionManifold block is δ with q' = [cos|δ|, sin|δ| δ/|δ|] ⊗ q:
@@ -410,7 +401,7 @@ PoseGraphResult SolvePoseGraph(const std::vector<Eigen::Isometry3d>& initial,
   // perturbation) as the left one PriorCost weighs, Ad(T) Σ Ad(T)ᵀ.
   Matrix6d held_L = Matrix6d::Zero();
   if (options.first_free_node > 0) {
-    const Matrix6d A = Adjoint(initial[options.first_free_node]);
+    const Matrix6d A = core::Adjoint(initial[options.first_free_node]);
     held_L =
         SqrtInformation<6>(Matrix6d(A * options.held_covariance * A.transpose()), increment_floor);
   }

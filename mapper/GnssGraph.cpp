@@ -49,6 +49,25 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
   return factors;
 }
 
+namespace {
+
+// Roll and pitch reach the graph only through the chain (its increments and the tilt priors,
+// which restate the same increments frame by frame): their marginal there counts the chain's
+// information many times over (KITTI with fixes: roll σ 0.17° where the error is 0.95° and the
+// chain says 0.92°). Their rows and columns of `graph` are scaled up to the chain's σ,
+// correlations kept.
+void KeepTheChainsTilt(const graph::Matrix6d& chain, graph::Matrix6d* graph) {
+  graph::Matrix6d S = graph::Matrix6d::Identity();
+  for (int axis = 0; axis < 2; ++axis) {
+    const double graph_var = (*graph)(axis, axis);
+    if (graph_var > 0.0 && chain(axis, axis) > graph_var)
+      S(axis, axis) = std::sqrt(chain(axis, axis) / graph_var);
+  }
+  *graph = S * *graph * S;
+}
+
+}  // namespace
+
 std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
                                        io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
                                        const std::vector<ReferenceMatch>& matches,
@@ -176,11 +195,6 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   out.solution = graph::SolvePoseGraph(
       initial, RelativeFactors(results, sensor, mapper_options),
       enough_fixes ? positions : std::vector<graph::PositionFactor>{}, poses, solver, loops);
-  // Roll and pitch reach the graph only through the chain (its increments and the priors
-  // above, which restate the same increments frame by frame): their marginal there counts the
-  // chain's information many times over (KITTI with fixes: roll σ 0.17° where the error is
-  // 0.95° and the chain says 0.92°). Their rows and columns are scaled up to the chain's σ,
-  // correlations kept.
   if (!solver.covariance && out.solution.solved) {
     out.solution.covariance_message = "not computed: " + std::to_string(results.size()) +
                                       " frames, more than graph.covariance_max_frames " +
@@ -194,16 +208,8 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
           k < held->covariance.size() ? held->covariance[k] : results[k].step.covariance;
     }
   }
-  for (std::size_t k = 0; k < covariance.size() && k < results.size(); ++k) {
-    graph::Matrix6d S = graph::Matrix6d::Identity();
-    for (int axis = 0; axis < 2; ++axis) {
-      const double graph_var = covariance[k](axis, axis);
-      const double chain_var = results[k].step.covariance(axis, axis);
-      if (graph_var > 0.0 && chain_var > graph_var)
-        S(axis, axis) = std::sqrt(chain_var / graph_var);
-    }
-    covariance[k] = S * covariance[k] * S;
-  }
+  for (std::size_t k = 0; k < covariance.size() && k < results.size(); ++k)
+    KeepTheChainsTilt(results[k].step.covariance, &covariance[k]);
   if (!enough_fixes) {  // too few to weigh: left out, not rejected
     for (std::vector<std::size_t>& f : out.frame_fixes) f.clear();
   }

@@ -48,15 +48,7 @@ bool IsFiniteRigid(const Eigen::Isometry3d& T) {
   return orthogonality <= 1e-6 && R.determinant() > 0.0;
 }
 
-Matrix6d Adjoint(const Eigen::Isometry3d& T) {
-  const Eigen::Matrix3d R = T.linear();
-  const Eigen::Vector3d t = T.translation();
-  Matrix6d ad = Matrix6d::Zero();
-  ad.topLeftCorner<3, 3>() = R;
-  ad.bottomLeftCorner<3, 3>() = core::Skew(t) * R;
-  ad.bottomRightCorner<3, 3>() = R;
-  return ad;
-}
+Matrix6d Adjoint(const Eigen::Isometry3d& T) { return core::Adjoint(T); }
 
 PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
   if (!IsFiniteRigid(T_world_body0_odom)) {

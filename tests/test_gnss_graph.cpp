@@ -24,11 +24,13 @@
 #include "sim/DeadReckoning.hpp"
 #include "tests/support/CommandFixture.hpp"
 #include "tests/support/DriftCsv.hpp"
+#include "tests/support/GnssFixes.hpp"
 #include "tests/support/Sanitizers.hpp"
 #include "tests/support/ScratchDir.hpp"
 
 namespace fs = std::filesystem;
 using rovermap::testing::CommandResult;
+using rovermap::testing::FixOf;
 using rovermap::testing::ReadCsv;
 using rovermap::testing::RunRovermapIn;
 using rovermap::testing::Slurp;
@@ -36,21 +38,6 @@ using rovermap::testing::Slurp;
 namespace {
 
 const fs::path kTinyCloud = fs::path(ROVERMAP_DATASETS_DIR) / "sim_tiny_cloud";
-
-// A fix of `pose`'s body origin moved by `offset` [m, ENU], reporting σ `sigma_m` everywhere.
-rovermap::io::GnssFix FixOf(const rovermap::io::StampedPose& pose,
-                            const rovermap::io::Georeference& georef, const Eigen::Vector3d& offset,
-                            double sigma_m) {
-  const Eigen::Vector3d p = pose.T_world_body.translation() + offset;
-  const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
-  rovermap::io::GnssFix f;
-  f.timestamp = pose.timestamp;
-  f.latitude_deg = geo.x();
-  f.longitude_deg = geo.y();
-  f.altitude_m = geo.z();
-  f.sigma_enu_m = Eigen::Vector3d::Constant(sigma_m);
-  return f;
-}
 
 // One traverse for the suite: simulated once, replayed with and without the graph.
 class GnssGraph : public ::testing::Test {

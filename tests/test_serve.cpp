@@ -26,6 +26,7 @@
 #include "io/Sequence.hpp"
 #include "io/Tum.hpp"
 #include "tests/support/DriftCsv.hpp"
+#include "tests/support/GnssFixes.hpp"
 #include "tests/support/ServeFixture.hpp"
 
 namespace fs = std::filesystem;
@@ -513,16 +514,8 @@ TEST_F(Serve, GnssFixesInTheInboxGiveTheGraphsTrajectory) {
   const rovermap::io::Georeference georef(rovermap::io::ReadSequenceInfo(kTinyCloud).origin);
   std::vector<rovermap::io::GnssFix> fixes;
   for (std::size_t k = 0; k < truth.size(); ++k) {
-    const Eigen::Vector3d p = truth[k].T_world_body.translation() +
-                              0.02 * Eigen::Vector3d(std::sin(3.0 * k), std::cos(5.0 * k), 0.0);
-    const Eigen::Vector3d geo = georef.EnuToGeodetic(p.x(), p.y(), p.z());
-    rovermap::io::GnssFix f;
-    f.timestamp = truth[k].timestamp;
-    f.latitude_deg = geo.x();
-    f.longitude_deg = geo.y();
-    f.altitude_m = geo.z();
-    f.sigma_enu_m = Eigen::Vector3d::Constant(0.02);
-    fixes.push_back(f);
+    fixes.push_back(rovermap::testing::FixOf(
+        truth[k], georef, 0.02 * Eigen::Vector3d(std::sin(3.0 * k), std::cos(5.0 * k), 0.0), 0.02));
   }
   const fs::path seq = dir_ / "seq";
   fs::copy(kTinyCloud, seq, fs::copy_options::recursive);
