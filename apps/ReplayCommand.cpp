@@ -242,6 +242,7 @@ int RunReplay(const ReplayArgs& args) {
               std::cerr << "replay: fusing the maps again from the pose graph, frame " << k << "/"
                         << n << "\n";
           });
+      graph->maps = mapper::GraphOutcome::Maps::kFusedAgain;
     }
   }
 

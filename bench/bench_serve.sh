@@ -123,6 +123,8 @@ b=$(printf '%s\n' "${on[@]}" | median)
 printf '%-30s %8d %14.2f %14.2f %10.2f\n' "sim gnss loop, p=10" "$n" "$(calc "$n / $a")" \
   "$(calc "$n / $b")" "$(calc "$a / $b")"
 grep -o 'pose graph over [0-9]* frames.*ms' "$W/serve.log" | tail -1 | sed 's/^/last solve: /'
+# The last publication's DEM moved onto the graph's poses (summary.json graph.dem_moved).
+tr -d ' \n' < "$W/serve/summary.json" | grep -o '"dem_moved":{[^}]*}' | sed 's/^/last DEM move: /'
 
 printf '\n%-30s %10s %14s %14s %16s\n' "restart after" "frames" "restart [ms]" "snapshot [MB]" \
   "replay them [s]"

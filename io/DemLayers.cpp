@@ -40,6 +40,7 @@ DemLayers RasteriseDem(const dem::ElevationMap& map) {
   layers.elevation_m.assign(pixels, kNaN);
   layers.stddev_m.assign(pixels, kNaN);
   layers.count.assign(pixels, 0.0f);
+  layers.frame.assign(pixels, 0);
 
   // Tile rows straight into the raster.
   const dem::GridIndex& index = map.index();
@@ -61,6 +62,7 @@ DemLayers RasteriseDem(const dem::ElevationMap& map) {
         layers.elevation_m[o] = v.elevation_m;
         layers.stddev_m[o] = std::sqrt(std::max(0.0f, v.variance_m2));
         layers.count[o] = static_cast<float>(v.count);
+        layers.frame[o] = v.first_frame;
         ++layers.valid_cells;
       }
     }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "dem/ElevationMap.hpp"
@@ -24,6 +25,11 @@ struct DemLayers {
   std::vector<float> elevation_m;
   std::vector<float> stddev_m;
   std::vector<float> count;
+  /// Per pixel, the frame of the first point of the cell's estimate (CellValue::first_frame); 0
+  /// where not published. What a solved pose graph moves the cell with when the DEM is not
+  /// fused again (mapper/DemWarp): the first frame rather than the middle or the last one, as a
+  /// cell a loop's two passes share holds the first pass's place (measured: docs/serve.md).
+  std::vector<std::uint32_t> frame;
   std::size_t valid_cells = 0;  ///< published cells [count]
 
   /// World (x, y) [m] in the grid frame [m] (ElevationMap::WorldToGrid).

@@ -28,6 +28,11 @@ struct GraphOutcome {
   /// Per frame: its fixes' indices into solution.fix_used (empty: none).
   std::vector<std::vector<std::size_t>> frame_fixes;
   std::size_t frames_refused = 0;  ///< frames that could not be read again for the re-fusion
+  /// How the DEM and the OctoMap follow the solved graph (summary.json `graph.maps`): fused
+  /// again from its poses (replay), the DEM moved with it and the OctoMap the chain's (serve,
+  /// mapper/DemWarp), or both the chain's.
+  enum class Maps { kChain, kFusedAgain, kDemMoved };
+  Maps maps = Maps::kChain;
   /// Every match against the reference DEM, refused ones too (ReferenceTrack), in order.
   std::vector<ReferenceMatch> reference_matches;
   /// Per entry of reference_matches: its index into solution.pose_used, or −1 if refused.

@@ -457,7 +457,8 @@ void Daemon::Publish() {
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
   // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
-  // published trajectory is its own; the DEM stays the chain's until the next replay.
+  // published trajectory is its own, and so is the DEM's place (moved with it, not fused again:
+  // mapper/DemWarp); the OctoMap stays the chain's.
   OutputState state(*mapper_);
   const std::vector<io::GnssFix> fixes = InboxFixes();
   try {
@@ -468,6 +469,7 @@ void Daemon::Publish() {
     Log(std::string("serve: pose graph not solved: ") + e.what());
   }
   if (state.graph && state.graph->solution.solved) {
+    state.move_dem_with_graph = true;  // on the publisher's thread (mapper/DemWarp)
     const graph::PoseGraphResult& g = state.graph->solution;
     std::ostringstream line;
     line << "serve: pose graph over " << mapper_->results().size() << " frames";

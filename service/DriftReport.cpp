@@ -296,6 +296,9 @@ nlohmann::json GraphJson(const GraphOutcome& graph) {
           {"iterations", s.iterations},
           {"solve_ms", s.solve_ms},
           {"frames_not_refused", graph.frames_refused},
+          {"maps", graph.maps == GraphOutcome::Maps::kFusedAgain ? "fused again"
+                   : graph.maps == GraphOutcome::Maps::kDemMoved ? "dem moved"
+                                                                 : "chain"},
           {"message", s.message}};
 }
 

@@ -13,6 +13,7 @@
 
 #include "io/DemLayers.hpp"
 #include "io/Georeference.hpp"
+#include "mapper/DemWarp.hpp"
 #include "mapper/GnssGraph.hpp"
 #include "mapper/Mapper.hpp"
 
@@ -41,6 +42,11 @@ struct OutputState {
   /// solved, trajectory.tum, the metrics and the previews are its poses, and the chained ones
   /// go to trajectory_f2f.tum.
   std::optional<GraphOutcome> graph;
+  /// With a solved graph, write the DEM (and terrain.tif) moved onto its poses
+  /// (mapper/DemWarp) rather than as fused: serve, which does not fuse its frames again.
+  bool move_dem_with_graph = false;
+  /// Set by WriteOutputs on the state it wrote when it moved the DEM (summary.json graph.maps).
+  std::optional<DemWarpStats> dem_moved;
 };
 
 }  // namespace rovermap::mapper

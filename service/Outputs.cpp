@@ -70,6 +70,18 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
                             RunInfo run, const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file,
                             terrain::TerrainCache* terrain_cache) {
+  if (state.move_dem_with_graph && state.graph && state.graph->solution.solved) {
+    // serve: the chain's DEM moved onto the graph's poses, written as replay writes its own.
+    const auto warp_start = std::chrono::steady_clock::now();
+    OutputState moved = state;
+    DemWarpStats stats;
+    moved.dem = WarpDemToGraph(state.dem, state.results, *state.graph, &stats);
+    stats.ms = core::MsSince(warp_start);
+    moved.move_dem_with_graph = false;
+    moved.dem_moved = stats;
+    moved.graph->maps = GraphOutcome::Maps::kDemMoved;
+    return WriteOutputs(out_dir, moved, std::move(run), eval_options, after_file, terrain_cache);
+  }
   const auto done = [&](const char* name) {
     if (after_file) after_file(name);
   };
@@ -141,6 +153,14 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
   summary["terrain"] = std::move(terrain);
   if (graph != nullptr) {
     summary["graph"] = GraphJson(*graph);
+    if (state.dem_moved) {
+      summary["graph"]["dem_moved"] = {{"cells_in", state.dem_moved->cells_in},
+                                       {"cells_moved", state.dem_moved->cells_moved},
+                                       {"cells_out", state.dem_moved->cells_out},
+                                       {"median_shift_m", state.dem_moved->median_shift_m},
+                                       {"max_shift_m", state.dem_moved->max_shift_m},
+                                       {"ms", state.dem_moved->ms}};
+    }
     if (optimised && drift && chained_drift) {
       summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);
     }

@@ -11,25 +11,15 @@
 #include <vector>
 
 #include "graph/PoseGraph.hpp"
+#include "tests/support/Poses.hpp"
 
 using namespace rovermap;
 using graph::Matrix6d;
 
 namespace {
 
-Eigen::Isometry3d Pose(double x, double y, double yaw_deg) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).matrix();
-  T.translation() = Eigen::Vector3d(x, y, 0.0);
-  return T;
-}
-
-Matrix6d Diagonal(double sigma_rad, double sigma_m) {
-  Matrix6d c = Matrix6d::Zero();
-  c.diagonal() << Eigen::Vector3d::Constant(sigma_rad * sigma_rad),
-      Eigen::Vector3d::Constant(sigma_m * sigma_m);
-  return c;
-}
+const auto& Pose = rovermap::testing::PlanarPose;
+const auto& Diagonal = rovermap::testing::DiagonalCovariance;
 
 // A 100 m arc of 201 nodes, 0.5 m apart, turning 0.3°/m. Its increments are measured with
 // noise drawn from the covariance they are given (0.6° and 2 cm a step: the chain's heading

@@ -1,0 +1,37 @@
+#pragma once
+// The chain's DEM moved onto a solved pose graph's trajectory without fusing its frames again:
+// what `serve` publishes (docs/serve.md), where a second pass over every frame at each
+// publication is out of its time budget. Each published cell moves rigidly with the graph's
+// correction of the frame that made it (T_graph · T_chain⁻¹ of DemLayers::frame), is splatted
+// bilinearly into the grid, and trades the chain's pose share of its variance for the graph's.
+// A deformation of the map, as the graph's correction varies slowly along the path; what it
+// cannot do is pull apart two passes that the chain fused into one cell (replay's re-fusion can).
+
+#include <cstddef>
+#include <vector>
+
+#include "io/DemLayers.hpp"
+#include "mapper/GnssGraph.hpp"
+#include "mapper/Mapper.hpp"
+
+namespace rovermap::mapper {
+
+struct DemWarpStats {
+  std::size_t cells_in = 0;     ///< published cells of the chain's DEM [count]
+  std::size_t cells_moved = 0;  ///< of them, with a frame the graph solved [count]
+  std::size_t cells_out = 0;    ///< published cells of the moved DEM [count]
+  double max_shift_m = 0.0;     ///< largest horizontal move of a cell [m]
+  double median_shift_m = 0.0;  ///< median horizontal move [m]
+  double ms = 0.0;              ///< time it took, set by the caller that measures it [ms]
+};
+
+/// `dem` (the chain's, with its frame layer) moved with `graph`'s correction of each cell's
+/// frame among `results`. A cell whose frame has no solved pose keeps the chain's place. An
+/// output cell is published when the moved cells cover at least half of it (bilinear weights);
+/// its height and σ are the covered cells' inverse-variance mean, its count their weighted
+/// mean. Returns `dem` unchanged when the graph is not solved or `dem` has no frame layer.
+/// Never throws on data.
+io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameResult>& results,
+                             const GraphOutcome& graph, DemWarpStats* stats = nullptr);
+
+}  // namespace rovermap::mapper
