@@ -41,6 +41,13 @@ struct MovedCell {
   std::uint32_t frame;
 };
 
+// A moved cell's bilinear share of an output pixel.
+struct Share {
+  std::size_t pixel;
+  double b;
+  const MovedCell* cell;
+};
+
 }  // namespace
 
 io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameResult>& results,
@@ -140,9 +147,10 @@ io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameRe
   out.width = static_cast<int>(max_x - min_x + 1);
   out.height = static_cast<int>(max_y - min_y + 1);
   const std::size_t n = static_cast<std::size_t>(out.width) * out.height;
-  std::vector<double> sum_b(n, 0.0), sum_w(n, 0.0), sum_wz(n, 0.0), sum_bcount(n, 0.0),
-      best_b(n, 0.0);
-  std::vector<std::uint32_t> best_frame(n, 0);
+  // Four shares per moved cell, gathered by output pixel: a sparse sum, as a DEM's published
+  // cells are a small part of its raster (dense sums of a 300 m loop's raster took 90 ms).
+  std::vector<Share> shares;
+  shares.reserve(4 * moved.size());
   for (const MovedCell& m : moved) {
     const double u = m.gx / s - 0.5, w = m.gy / s - 0.5;
     const auto ix = static_cast<std::int64_t>(std::floor(u));
@@ -154,30 +162,39 @@ io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameRe
         if (b <= 0.0) continue;
         const auto col = static_cast<std::size_t>(ix + dx - min_x);
         const auto row = static_cast<std::size_t>(max_y - (iy + dy));
-        const std::size_t o = row * static_cast<std::size_t>(out.width) + col;
-        const double wi = b / m.variance;
-        sum_b[o] += b;
-        sum_w[o] += wi;
-        sum_wz[o] += wi * m.z;
-        sum_bcount[o] += b * m.count;
-        if (b > best_b[o]) {
-          best_b[o] = b;
-          best_frame[o] = m.frame;
-        }
+        shares.push_back({row * static_cast<std::size_t>(out.width) + col, b, &m});
       }
     }
   }
+  std::stable_sort(shares.begin(), shares.end(),
+                   [](const Share& a, const Share& b) { return a.pixel < b.pixel; });
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   out.elevation_m.assign(n, kNaN);
   out.stddev_m.assign(n, kNaN);
   out.count.assign(n, 0.0f);
   out.frame.assign(n, 0);
-  for (std::size_t o = 0; o < n; ++o) {
-    if (sum_b[o] < 0.5) continue;  // less than half a cell's worth reached it
-    out.elevation_m[o] = static_cast<float>(sum_wz[o] / sum_w[o]);
-    out.stddev_m[o] = static_cast<float>(std::sqrt(sum_b[o] / sum_w[o]));
-    out.count[o] = static_cast<float>(sum_bcount[o] / sum_b[o]);
-    out.frame[o] = best_frame[o];
+  for (std::size_t i = 0; i < shares.size();) {
+    const std::size_t o = shares[i].pixel;
+    double sum_b = 0.0, sum_w = 0.0, sum_wz = 0.0, sum_bcount = 0.0, best_b = 0.0;
+    std::uint32_t best_frame = 0;
+    for (; i < shares.size() && shares[i].pixel == o; ++i) {
+      const double b = shares[i].b;
+      const MovedCell& m = *shares[i].cell;
+      const double wi = b / m.variance;
+      sum_b += b;
+      sum_w += wi;
+      sum_wz += wi * m.z;
+      sum_bcount += b * m.count;
+      if (b > best_b) {
+        best_b = b;
+        best_frame = m.frame;
+      }
+    }
+    if (sum_b < 0.5) continue;  // less than half a cell's worth reached it
+    out.elevation_m[o] = static_cast<float>(sum_wz / sum_w);
+    out.stddev_m[o] = static_cast<float>(std::sqrt(sum_b / sum_w));
+    out.count[o] = static_cast<float>(sum_bcount / sum_b);
+    out.frame[o] = best_frame;
     ++out.valid_cells;
   }
   st.cells_out = out.valid_cells;

@@ -56,6 +56,7 @@ class GraphRun {
                                     std::size_t window_frames = 0);
 
  private:
+  friend struct CheckpointAccess;  // service/Checkpoint: the tracks kept across a restart
   GraphSetup setup_;
   std::unique_ptr<ReferenceTrack> track_;
   std::unique_ptr<RevisitTrack> revisit_;

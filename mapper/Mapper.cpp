@@ -258,7 +258,7 @@ FrameResult Mapper::SkipFrame(std::size_t index, double timestamp,
   return r;
 }
 
-FrameResult Mapper::Reapply(const FrameResult& recorded, const io::Frame* frame) {
+FrameResult Mapper::Reapply(const FrameResult& recorded, const io::Frame* frame, FrameBins* bins) {
   const std::string where = "frame " + std::to_string(recorded.index) + ": ";
   if (recorded.status == FrameStatus::kBadFrame) {
     SkipFrame(recorded.index, recorded.timestamp, recorded.step.T_world_body_odom,
@@ -271,6 +271,7 @@ FrameResult Mapper::Reapply(const FrameResult& recorded, const io::Frame* frame)
     if (!prepared.loaded.ok) {
       throw ReapplyError(where + "could be read before, not now: " + prepared.loaded.reason);
     }
+    if (bins) *bins = BinFrame(prepared.Fused(), prepared.isolated.keep);
     Process(*frame, std::move(prepared), 0.0, &recorded);
   }
   // Re-applied, the chain must land on the very pose it reached the first time.

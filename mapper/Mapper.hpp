@@ -26,6 +26,7 @@
 #include "mapper/MapperOptions.hpp"
 #include "mapper/OctoMapWorker.hpp"
 #include "mapper/OutlierFilter.hpp"
+#include "mapper/Patches.hpp"
 #include "mapper/PoseChain.hpp"
 #include "registration/Icp.hpp"
 #include "stereo/StereoOptions.hpp"
@@ -109,7 +110,7 @@ struct PreparedFrame {
   /// registers merged points (MapperOptions::registration_cell_px): then it stays, for the DEM.
   LoadedFrame loaded;
   std::unique_ptr<registration::IndexedCloud> source;  ///< null when !loaded.ok
-  OutlierMask isolated;  ///< over the points fused (Fused())
+  OutlierMask isolated;                                ///< over the points fused (Fused())
   /// The points the DEM and the OctoMap take: the loaded cloud, or `source`'s when it was moved.
   const registration::PointCloud& Fused() const {
     return loaded.cloud.empty() && source ? source->cloud() : loaded.cloud;
@@ -176,7 +177,9 @@ class Mapper {
   /// does not need: pass nullptr) without registering; the state then equals the one
   /// ProcessFrame left, and results() ends with `recorded`.
   /// @throw ReapplyError if the frame cannot be read now or the chained pose differs.
-  FrameResult Reapply(const FrameResult& recorded, const io::Frame* frame);
+  /// `bins`: when given, the frame's points binned for the pose graph's tracks (BinFrame).
+  FrameResult Reapply(const FrameResult& recorded, const io::Frame* frame,
+                      FrameBins* bins = nullptr);
 
   /// Empties the DEM and the OctoMap, keeping the results and the chain: the pose graph's
   /// re-fusion (GnssGraph's RefuseFrames) fuses every frame again at its optimised pose.

@@ -65,6 +65,7 @@ class PatchAccumulator {
                            std::size_t min_points = 3) const;
 
  private:
+  friend struct CheckpointAccess;  // service/Checkpoint: kept across a daemon's restart
   struct Placed {
     std::size_t frame = 0;
     std::vector<Eigen::Vector3d> centroid;  // world

@@ -96,6 +96,7 @@ class ReferenceTrack {
   const std::vector<ReferenceMatch>& matches() const { return matches_; }
 
  private:
+  friend struct CheckpointAccess;  // service/Checkpoint: kept across a daemon's restart
   const io::ReferenceDem& reference_;
   ReferenceOptions options_;
   registration::RegistrationOptions registration_;

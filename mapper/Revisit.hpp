@@ -46,6 +46,7 @@ class RevisitTrack {
   const std::vector<RevisitMatch>& matches() const { return matches_; }
 
  private:
+  friend struct CheckpointAccess;  // service/Checkpoint: kept across a daemon's restart
   struct Saved {
     std::vector<Post> posts;
     io::ReferenceGrid grid;

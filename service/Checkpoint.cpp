@@ -23,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '8'};
+constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '9'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
@@ -63,6 +63,17 @@ class Writer {
     Put<std::int32_t>(static_cast<std::int32_t>(e));
   }
   void Text(const std::string& s) { String(s); }
+  /// Plain values stored as bytes (a vector of doubles, of Eigen vectors).
+  template <typename T>
+  void Array(const std::vector<T>& v) {
+    Bytes(v.data(), v.size() * sizeof(T));
+  }
+  /// A container's elements, each with `visit(io, element)`.
+  template <typename Container, typename Visit>
+  void Seq(const Container& c, Visit&& visit) {
+    Put<std::uint64_t>(c.size());
+    for (const auto& e : c) visit(*this, e);
+  }
   std::string& data() { return data_; }
 
  private:
@@ -114,6 +125,19 @@ class Reader {
     e = static_cast<E>(v);
   }
   void Text(std::string& s) { s = String(); }
+  template <typename T>
+  void Array(std::vector<T>& v) {
+    const std::string_view bytes = Bytes();
+    if (bytes.size() % sizeof(T) != 0) Fail();
+    v.resize(bytes.size() / sizeof(T));
+    if (!v.empty()) std::memcpy(static_cast<void*>(v.data()), bytes.data(), bytes.size());
+  }
+  template <typename Container, typename Visit>
+  void Seq(Container& c, Visit&& visit) {
+    c.clear();
+    c.resize(Count(left()));  // every element takes a byte at least
+    for (auto& e : c) visit(*this, e);
+  }
   template <typename Derived>
   void Matrix(Eigen::MatrixBase<Derived>& m) {
     Matrix(&m);
@@ -195,6 +219,58 @@ void VisitResult(Io& io, Result& f) {
   io.template Value<double>(f.reference_distance_m);
   io.Matrix(f.odometry_bias.bias);  // a column: the six entries in order
   io.Matrix(f.odometry_bias.information);
+}
+
+// The pose graph's sources (GraphRun's tracks): their matches and the ground they keep for the
+// next ones. As above, every field once, in the file's order.
+template <typename Io, typename P>
+void VisitPost(Io& io, P& p) {
+  io.Matrix(p.p);
+  io.template Value<std::uint64_t>(p.points);
+  io.template Value<double>(p.sigma_m);
+}
+
+template <typename Io, typename G>
+void VisitGrid(Io& io, G& g) {
+  io.Matrix(g.origin_world);
+  io.template Value<double>(g.spacing_m);
+  io.template Value<std::int32_t>(g.width);
+  io.template Value<std::int32_t>(g.height);
+  io.Array(g.z_m);
+  io.Array(g.sigma_m);
+}
+
+template <typename Io, typename M>
+void VisitMatch(Io& io, M& m) {
+  io.template Value<std::uint64_t>(m.frame);
+  io.template Value<std::uint64_t>(m.first_frame);
+  io.template Value<std::uint64_t>(m.last_frame);
+  io.Flag(m.matched);
+  io.Text(m.reason);
+  io.template Value<std::uint64_t>(m.posts);
+  io.template Value<double>(m.rms_before_m);
+  io.template Value<double>(m.rms_after_m);
+  io.Pose(m.correction);
+  io.Pose(m.T_world_body);
+  io.Flag(m.vertical_absolute);
+  io.template Value<double>(m.placement_sigma_m);
+  io.Matrix(m.information);
+  io.template Value<double>(m.sigma_x_m);
+  io.template Value<double>(m.sigma_y_m);
+  io.template Value<double>(m.sigma_yaw_deg);
+  io.template Value<double>(m.relief_ratio);
+  io.template Value<std::int32_t>(m.starts);
+  io.template Value<double>(m.ms);
+}
+
+template <typename Io, typename R>
+void VisitRevisit(Io& io, R& r) {
+  io.template Value<std::uint64_t>(r.from_frame);
+  VisitMatch(io, r.match);
+  io.template Value<std::uint64_t>(r.factor.from);
+  io.template Value<std::uint64_t>(r.factor.to);
+  io.Pose(r.factor.T_from_to);
+  io.Matrix(r.factor.information);
 }
 
 void PutResult(Writer* w, const FrameResult& f) { VisitResult(*w, f); }
@@ -344,6 +420,82 @@ struct CheckpointAccess {
     w->String(octomap.str());
   }
 
+  // GraphRun's tracks: a flag and the state of each (a track the run has not is read and
+  // dropped: a reference DEM usable before the restart and not now).
+  template <typename Io, typename P>
+  static void VisitPatches(Io& io, P& p) {
+    io.Seq(p.frames_, [](auto& io2, auto& placed) {
+      io2.template Value<std::uint64_t>(placed.frame);
+      io2.Array(placed.centroid);
+      io2.Array(placed.weight);
+      io2.Array(placed.count);
+      io2.Flag(placed.weighted);
+    });
+    io.Array(p.path_m_);
+    io.Matrix(p.last_position_);
+  }
+  template <typename Io, typename Last, typename Seed, typename Patches, typename Matches>
+  static void VisitReferenceTrack(Io& io, Last& last_match_m, Seed& seed, Patches& patches,
+                                  Matches& matches) {
+    io.template Value<double>(last_match_m);
+    io.Pose(seed);
+    VisitPatches(io, patches);
+    io.Seq(matches, [](auto& io2, auto& m) { VisitMatch(io2, m); });
+  }
+  template <typename Io, typename Last, typename Patches, typename Saved, typename Matches>
+  static void VisitRevisitTrack(Io& io, Last& last_look_m, Patches& patches, Saved& saved,
+                                Matches& matches) {
+    io.template Value<double>(last_look_m);
+    VisitPatches(io, patches);
+    io.Seq(saved, [](auto& io2, auto& s) {
+      io2.Seq(s.posts, [](auto& io3, auto& post) { VisitPost(io3, post); });
+      VisitGrid(io2, s.grid);
+      io2.Matrix(s.box.min());
+      io2.Matrix(s.box.max());
+      io2.template Value<std::uint64_t>(s.frame);
+      io2.template Value<double>(s.path_m);
+    });
+    io.Seq(matches, [](auto& io2, auto& m) { VisitRevisit(io2, m); });
+  }
+
+  static void SaveGraph(const GraphRun* g, Writer* w) {
+    const ReferenceTrack* t = g ? g->track_.get() : nullptr;
+    w->Put<std::uint8_t>(t ? 1 : 0);
+    if (t) VisitReferenceTrack(*w, t->last_match_m_, t->seed_, t->patches_, t->matches_);
+    const RevisitTrack* v = g ? g->revisit_.get() : nullptr;
+    w->Put<std::uint8_t>(v ? 1 : 0);
+    if (v) VisitRevisitTrack(*w, v->last_look_m_, v->patches_, v->saved_, v->matches_);
+  }
+
+  static void RestoreGraph(Reader* r, GraphRun* g) {
+    if (r->Get<std::uint8_t>() != 0) {
+      double last = 0.0;
+      Eigen::Isometry3d seed = Eigen::Isometry3d::Identity();
+      PatchAccumulator patches;
+      std::vector<ReferenceMatch> matches;
+      VisitReferenceTrack(*r, last, seed, patches, matches);
+      if (ReferenceTrack* t = g ? g->track_.get() : nullptr) {
+        t->last_match_m_ = last;
+        t->seed_ = seed;
+        t->patches_ = std::move(patches);
+        t->matches_ = std::move(matches);
+      }
+    }
+    if (r->Get<std::uint8_t>() != 0) {
+      double last = 0.0;
+      PatchAccumulator patches;
+      std::vector<RevisitTrack::Saved> saved;
+      std::vector<RevisitMatch> matches;
+      VisitRevisitTrack(*r, last, patches, saved, matches);
+      if (RevisitTrack* v = g ? g->revisit_.get() : nullptr) {
+        v->last_look_m_ = last;
+        v->patches_ = std::move(patches);
+        v->saved_ = std::move(saved);
+        v->matches_ = std::move(matches);
+      }
+    }
+  }
+
   static void Restore(Reader* r, Mapper* m,
                       const std::function<io::Frame(std::size_t)>& read_frame) {
     std::vector<FrameResult> results(r->Count(r->left()));
@@ -458,7 +610,9 @@ bool Checkpoint::Exists() const {
 }
 
 DaemonState Checkpoint::Restore(Mapper* mapper,
-                                const std::function<io::Frame(std::size_t)>& read_frame) {
+                                const std::function<io::Frame(std::size_t)>& read_frame,
+                                GraphRun* graph,
+                                const std::function<void(const std::string&)>& log) {
   DaemonState state;
   std::error_code ec;
   const fs::path snapshot = directory_ / kSnapshotName;
@@ -488,6 +642,7 @@ DaemonState Checkpoint::Restore(Mapper* mapper,
     CheckFingerprint(body.String(), snapshot);
     state = GetDaemon(&body);
     CheckpointAccess::Restore(&body, mapper, read_frame);
+    CheckpointAccess::RestoreGraph(&body, graph);
     if (!body.AtEnd()) body.Fail();
   }
 
@@ -515,11 +670,18 @@ DaemonState Checkpoint::Restore(Mapper* mapper,
     if (after.next_index <= state.next_index) continue;  // already in the snapshot
     ++reapplied_;
     if (frame) {
+      FrameBins bins;  // the graph's matches take the frame's own points (mapper/Patches)
+      FrameBins* want_bins = graph && graph->wants_bins() ? &bins : nullptr;
       if (frame->status == FrameStatus::kBadFrame) {
         mapper->Reapply(*frame, nullptr);
       } else {
         const io::Frame read = read_frame(frame->index);
-        mapper->Reapply(*frame, &read);
+        mapper->Reapply(*frame, &read, want_bins);
+      }
+      if (graph) {
+        for (const std::string& line : graph->AfterFrame(*mapper, bins, "serve")) {
+          if (log) log(line);
+        }
       }
     }
     state = after;
@@ -569,13 +731,14 @@ void Checkpoint::Append(const FrameResult* frame, const DaemonState& after) {
   ++journal_records_;
 }
 
-void Checkpoint::Save(const Mapper& mapper, const DaemonState& state) {
+void Checkpoint::Save(const Mapper& mapper, const DaemonState& state, const GraphRun* graph) {
   Writer w;
   w.data().reserve(snapshot_bytes_ + snapshot_bytes_ / 4);  // the last one's size, and growth
   w.data().append(kSnapshotMagic, sizeof(kSnapshotMagic));
   w.String(fingerprint_);
   PutDaemon(&w, state);
   CheckpointAccess::Save(mapper, &w);
+  CheckpointAccess::SaveGraph(graph, &w);
   w.Put<std::uint32_t>(Crc32(w.data()));
   snapshot_bytes_ = w.data().size();
 

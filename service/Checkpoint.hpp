@@ -25,6 +25,7 @@
 #include <string_view>
 #include <vector>
 
+#include "mapper/GraphRun.hpp"
 #include "mapper/Mapper.hpp"
 
 namespace rovermap::mapper {
@@ -58,12 +59,16 @@ class Checkpoint {
 
   /// Restores the saved state into `mapper` (fresh, built with the same options and sequence):
   /// the snapshot, then every journalled frame after it, re-applied with its files from
-  /// `read_frame(index)` (not called for bad frames). A torn last record is dropped.
+  /// `read_frame(index)` (not called for bad frames). A torn last record is dropped. With
+  /// `graph` (fresh, the same options and reference), its tracks are restored too and every
+  /// re-applied frame is given to its AfterFrame, as the interrupted run gave it; `log` gets
+  /// the lines that makes.
   /// @return the daemon's state; default (frame 0) when there is no checkpoint.
   /// @throw CheckpointError for another fingerprint or damaged files; ReapplyError or
   ///        io::IoError if a journalled frame cannot be re-applied.
-  DaemonState Restore(Mapper* mapper,
-                      const std::function<io::Frame(std::size_t index)>& read_frame);
+  DaemonState Restore(Mapper* mapper, const std::function<io::Frame(std::size_t index)>& read_frame,
+                      GraphRun* graph = nullptr,
+                      const std::function<void(const std::string&)>& log = {});
 
   /// Journals one step of the daemon: `frame` (nullptr for an index declared missing without
   /// a pose) and the daemon's state after it. Flushed to disk before it returns.
@@ -71,9 +76,10 @@ class Checkpoint {
   ///        ends with the previous record and a later append follows it.
   void Append(const FrameResult* frame, const DaemonState& after);
 
-  /// Writes a snapshot of `mapper` and `state`, then empties the journal.
+  /// Writes a snapshot of `mapper`, `state` and `graph`'s tracks (the pose graph's sources:
+  /// their matches and the ground they keep), then empties the journal.
   /// @throw io::IoError naming the file.
-  void Save(const Mapper& mapper, const DaemonState& state);
+  void Save(const Mapper& mapper, const DaemonState& state, const GraphRun* graph = nullptr);
 
   /// Journal records since the last snapshot [count].
   std::size_t journal_records() const { return journal_records_; }

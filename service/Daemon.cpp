@@ -111,21 +111,32 @@ bool Daemon::WaitForSequence(const std::atomic<int>& stop) {
 }
 
 void Daemon::Resume() {
-  checkpoint_ = std::make_unique<Checkpoint>(
-      setup_.out / "checkpoint", setup_.config_text + "\n--- sequence.yaml\n" + sequence_text_,
-      setup_.fault);
+  // The reference DEM is part of what the checkpoint was made with: its matches are kept.
+  std::string fingerprint = setup_.config_text + "\n--- sequence.yaml\n" + sequence_text_;
+  if (!setup_.reference_dem.empty()) {
+    std::error_code ignored;
+    const fs::path canonical = fs::weakly_canonical(setup_.reference_dem, ignored);
+    fingerprint +=
+        "\n--- reference DEM\n" + (canonical.empty() ? setup_.reference_dem : canonical).string();
+  }
+  checkpoint_ =
+      std::make_unique<Checkpoint>(setup_.out / "checkpoint", std::move(fingerprint), setup_.fault);
   // The snapshot, then the journalled frames re-applied (not registered again).
   if (checkpoint_->Exists()) {
     const auto start = Clock::now();
     const std::map<std::size_t, io::InboxFrameFiles> files = inbox_.Scan();
-    state_ = checkpoint_->Restore(mapper_.get(), [&](std::size_t index) {
-      const auto it = files.find(index);
-      if (it == files.end()) {
-        throw io::IoError((inbox_.frames_dir() / io::FrameStem(index)).string() +
-                          ".*: journalled frame no longer in the inbox; the checkpoint needs it");
-      }
-      return inbox_.Read(index, it->second, sequence_);
-    });
+    state_ = checkpoint_->Restore(
+        mapper_.get(),
+        [&](std::size_t index) {
+          const auto it = files.find(index);
+          if (it == files.end()) {
+            throw io::IoError(
+                (inbox_.frames_dir() / io::FrameStem(index)).string() +
+                ".*: journalled frame no longer in the inbox; the checkpoint needs it");
+          }
+          return inbox_.Read(index, it->second, sequence_);
+        },
+        graph_run_.get(), [this](const std::string& line) { Log(line); });
     restart_ms_ = MsBetween(start, Clock::now());
     if (!mapper_->results().empty()) last_timestamp_ = mapper_->results().back().timestamp;
     std::ostringstream line;
@@ -133,11 +144,6 @@ void Daemon::Resume() {
          << " journalled steps re-applied) in " << std::fixed << std::setprecision(0) << restart_ms_
          << " ms";
     Log(line.str());
-    if (graph_run_->wants_bins()) {
-      Log("serve: reference matches and revisits start afresh at frame " +
-          std::to_string(state_.next_index) +
-          ": the ground mapped before the restart is not matched again (docs/graph.md)");
-    }
     since_checkpoint_ = static_cast<int>(checkpoint_->journal_records());
     // Rejections a kill interrupted: the reason is already there, move the rest.
     for (const auto& [index, present] : files) {
@@ -173,7 +179,7 @@ void Daemon::Run(const std::atomic<int>& stop) {
   }
   // Signalled: the frame in hand is done; publish and checkpoint what there is.
   if (since_checkpoint_ > 0 || !fs::exists(checkpoint_->directory() / "state.bin")) {
-    checkpoint_->Save(*mapper_, state_);
+    checkpoint_->Save(*mapper_, state_, graph_run_.get());
     since_checkpoint_ = 0;
   }
   Publish();
@@ -376,6 +382,8 @@ void Daemon::DeclareMissing(std::size_t index, const io::InboxFrameFiles& files)
     const FrameResult result =
         mapper_->SkipFrame(index, poses->timestamp, poses->T_world_body_odom,
                            FallbackReason::kMissing, why, poses->T_world_body_truth);
+    // As every frame with a pose (and a restart's re-applied ones): the tracks' path goes on.
+    for (const std::string& line : graph_run_->AfterFrame(*mapper_, {}, "serve")) Log(line);
     last_timestamp_ = poses->timestamp;
     state_.rejected.push_back(index);
     ++state_.next_index;
@@ -406,7 +414,7 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
   since_checkpoint_ms_ += result->time.load_ms + result->time.total_ms;
   if (SnapshotDue(setup_.serve, ++since_checkpoint_, since_checkpoint_ms_, last_snapshot_ms_)) {
     const auto start = Clock::now();
-    checkpoint_->Save(*mapper_, state_);
+    checkpoint_->Save(*mapper_, state_, graph_run_.get());
     last_snapshot_ms_ = MsBetween(start, Clock::now());
     since_checkpoint_ = 0;
     since_checkpoint_ms_ = 0.0;

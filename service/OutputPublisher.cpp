@@ -22,6 +22,7 @@ void OutputPublisher::Publish(std::filesystem::path out_dir, OutputState state, 
                          after_file = std::move(after_file)]() mutable {
     const auto start = std::chrono::steady_clock::now();
     try {
+      MoveDemWithGraph(&state);  // serve's DEM onto the graph's poses, here beside the mapper
       WriteOutputs(out_dir, state, std::move(run), eval_options, after_file, &terrain_cache_);
     } catch (...) {
       error_ = std::current_exception();

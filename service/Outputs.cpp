@@ -60,6 +60,17 @@ nlohmann::json WriteTerrain(const std::filesystem::path& out_dir, const OutputSt
 
 }  // namespace
 
+void MoveDemWithGraph(OutputState* state) {
+  if (!state->move_dem_with_graph || !state->graph || !state->graph->solution.solved) return;
+  const auto start = std::chrono::steady_clock::now();
+  DemWarpStats stats;
+  state->dem = WarpDemToGraph(state->dem, state->results, *state->graph, &stats);
+  stats.ms = core::MsSince(start);
+  state->move_dem_with_graph = false;
+  state->dem_moved = stats;
+  state->graph->maps = GraphOutcome::Maps::kDemMoved;
+}
+
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
                             const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file) {
@@ -71,15 +82,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
                             const std::function<void(const std::string&)>& after_file,
                             terrain::TerrainCache* terrain_cache) {
   if (state.move_dem_with_graph && state.graph && state.graph->solution.solved) {
-    // serve: the chain's DEM moved onto the graph's poses, written as replay writes its own.
-    const auto warp_start = std::chrono::steady_clock::now();
-    OutputState moved = state;
-    DemWarpStats stats;
-    moved.dem = WarpDemToGraph(state.dem, state.results, *state.graph, &stats);
-    stats.ms = core::MsSince(warp_start);
-    moved.move_dem_with_graph = false;
-    moved.dem_moved = stats;
-    moved.graph->maps = GraphOutcome::Maps::kDemMoved;
+    OutputState moved = state;  // the publisher moves its own state, without this copy
+    MoveDemWithGraph(&moved);
     return WriteOutputs(out_dir, moved, std::move(run), eval_options, after_file, terrain_cache);
   }
   const auto done = [&](const char* name) {

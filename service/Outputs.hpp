@@ -26,7 +26,13 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
                             const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file = {});
 
-/// The same from an OutputState taken before (the daemon writes it on a thread of its own).
+/// With `state->move_dem_with_graph` and a solved graph: the DEM moved onto the graph's poses
+/// (mapper/DemWarp), `dem_moved` and `graph->maps` set, the flag cleared; else nothing. Never
+/// throws on data.
+void MoveDemWithGraph(OutputState* state);
+
+/// The same from an OutputState taken before (the daemon writes it on a thread of its own); a
+/// state still to be moved (MoveDemWithGraph) is moved on a copy.
 /// Touches nothing but `state`, `out_dir` and `terrain_cache`: when given, the terrain layers
 /// are computed anew only in the tiles whose heights changed since its last use (the daemon
 /// keeps one for its publications).

@@ -215,7 +215,7 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
     cp.Restore(m.get(), [&](std::size_t k) { return Read(k); });
     FAIL() << "a snapshot of format 2 was accepted";
   } catch (const mapper::CheckpointError& e) {
-    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 2, this one reads 8)"),
+    EXPECT_NE(std::string(e.what()).find("another rovermap version (format 2, this one reads 9)"),
               std::string::npos)
         << e.what();
   }

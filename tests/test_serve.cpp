@@ -428,6 +428,11 @@ TEST_F(Serve, RestartWithAnotherConfigurationIsRefused) {
                           " --set registration.max_iterations=7");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("another configuration"), std::string::npos) << r.err;
+  // The reference DEM too: its matches are in the checkpoint (the file need not be usable).
+  const auto with = Rovermap("serve --inbox " + inbox.string() + " --out " + out.string() +
+                             " --reference-dem " + (dir_ / "orbital.tif").string());
+  EXPECT_EQ(with.status, 2);
+  EXPECT_NE(with.err.find("another configuration"), std::string::npos) << with.err;
 }
 
 // A second SIGTERM leaves at once (status 1), mid-frame; the checkpoint is still consistent:
@@ -635,6 +640,45 @@ TEST_F(Serve, WithTheGraphTheDemIsMovedOntoItsPoses) {
   };
   EXPECT_NEAR(median_sigma(moved) / median_sigma(refused), 1.0, 0.25);
   EXPECT_GT(static_cast<double>(moved_vs_fused.cells), 0.85 * chain_vs_fused.cells);
+}
+
+// The pose graph's sources are kept across a restart (checkpoint format 9: the reference's and
+// the revisits' tracks, their matches and the ground they saved). An 80-frame simulated loop
+// whose second lap is matched onto ground saved in the first (the revisit keys shortened to its
+// 48 m), killed after frame 44 (snapshot at 40, the journal's frames re-applied through the
+// tracks): the restarted run finds the same revisits and publishes the uninterrupted run's
+// outputs. Before, the tracks started afresh, found nothing, and the trajectory was the chain's.
+TEST_F(Serve, ARestartKeepsTheGraphsSourcesAndTheirMatches) {
+  if (rovermap::testing::kSanitizedBuild) GTEST_SKIP() << "80 frames: the Release suite";
+  const fs::path seq = dir_ / "loop";
+  ASSERT_EQ(Rovermap("simulate --out " + seq.string() +
+                     " --set sim.sensor=cloud --set sim.cloud_stride_px=3 --set sim.frames=80"
+                     " --set sim.speed_m_s=1.2 --set sim.path=loop --set sim.terrain_size_m=60")
+                .status,
+            0);
+  const std::vector<std::string> keys = {
+      "--set", "revisit.every_m=5",       "--set", "revisit.window_m=10",
+      "--set", "revisit.min_gap_m=20",    "--set", "revisit.search_m=2",
+      "--set", "serve.checkpoint_share=0"};  // snapshots every 10 frames
+  const fs::path whole = dir_ / "whole";
+  const pid_t a = Start(MakeInbox(seq, 80, "inbox-whole"), whole, "log-whole", keys);
+  ASSERT_FALSE(WaitForNext(whole, 80).is_null()) << Slurp(dir_ / "log-whole");
+  Stop(a);
+  const nlohmann::json g = nlohmann::json::parse(Slurp(whole / "summary.json"))["graph"];
+  ASSERT_EQ(g["revisits_used"], 1) << g.dump(2);  // frames 56-72 onto frame 18
+
+  const fs::path inbox = MakeInbox(seq, 80, "inbox");
+  const fs::path out = dir_ / "out";
+  EXPECT_EQ(WaitExit(Start(inbox, out, "log", keys, "frame:processed:45")), 128 + SIGKILL);
+  const pid_t b = Start(inbox, out, "log", keys);
+  ASSERT_FALSE(WaitForNext(out, 80).is_null()) << Slurp(dir_ / "log");
+  Stop(b);
+  const std::string log = Slurp(dir_ / "log");
+  const std::size_t resumed = log.find("serve: resumed at frame 44");
+  ASSERT_NE(resumed, std::string::npos) << log;
+  EXPECT_NE(log.find("onto frame 18: matched", resumed), std::string::npos) << log;
+  ExpectSameOutputs(whole, out);
+  EXPECT_EQ(Slurp(out / "trajectory_f2f.tum"), Slurp(whole / "trajectory_f2f.tum"));
 }
 
 // A reference DEM that cannot be read: logged and left out, the daemon goes on; with
