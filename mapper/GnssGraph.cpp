@@ -163,7 +163,15 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
   if (previous != nullptr && window_frames > 0 && results.size() > window_frames) {
     const graph::PoseGraphResult& p = previous->solution;
     const std::size_t first_free = results.size() - window_frames;
-    if (p.solved && p.T_world_body.size() > first_free && p.T_world_body.size() <= results.size()) {
+    // A loop found since that solve onto ground older than the window: the frames between the
+    // two passes must move too, so this solve is whole (once; the next ones hold its result).
+    for (std::size_t k = previous->revisits.size(); k < revisits.size(); ++k) {
+      if (revisits[k].match.matched && revisits[k].from_frame < first_free) {
+        out.whole_for_loop_from = revisits[k].from_frame;
+      }
+    }
+    if (p.solved && p.T_world_body.size() > first_free && p.T_world_body.size() <= results.size() &&
+        !out.whole_for_loop_from) {
       held = &p;
       for (std::size_t k = 0; k < p.T_world_body.size(); ++k) initial[k] = p.T_world_body[k];
       for (std::size_t k = p.T_world_body.size(); k < results.size(); ++k) {

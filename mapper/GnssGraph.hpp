@@ -33,6 +33,9 @@ struct GraphOutcome {
   /// mapper/DemWarp), or both the chain's.
   enum class Maps { kChain, kFusedAgain, kDemMoved };
   Maps maps = Maps::kChain;
+  /// A windowed solve (a daemon's) made whole because a revisit found since the last solve
+  /// reaches this frame, before the window: the earlier frame of that loop.
+  std::optional<std::size_t> whole_for_loop_from;
   /// Every match against the reference DEM, refused ones too (ReferenceTrack), in order.
   std::vector<ReferenceMatch> reference_matches;
   /// Per entry of reference_matches: its index into solution.pose_used, or −1 if refused.

@@ -482,6 +482,10 @@ void Daemon::Publish() {
     std::ostringstream line;
     line << "serve: pose graph over " << mapper_->results().size() << " frames";
     if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
+    if (state.graph->whole_for_loop_from) {
+      line << " (whole: a revisit reaches frame " << *state.graph->whole_for_loop_from
+           << ", before the window)";
+    }
     line << ": " << g.fixes_used << " of " << state.graph->fixes << " GNSS fixes, " << g.poses_used
          << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
          << std::setprecision(0) << g.solve_ms << " ms";
