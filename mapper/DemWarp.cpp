@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <unordered_map>
 
 namespace rovermap::mapper {
@@ -142,13 +143,25 @@ io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameRe
     min_y = std::min(min_y, iy);
     max_y = std::max(max_y, w > static_cast<double>(iy) ? iy + 1 : iy);
   }
+  // A raster far larger than the chain's means corrections that tear the map apart (a graph
+  // gone wrong): the chain's DEM is kept rather than a raster of that size allocated.
+  const double width = static_cast<double>(max_x - min_x + 1);
+  const double height = static_cast<double>(max_y - min_y + 1);
+  if (width * height > std::max(4.0 * static_cast<double>(pixels), 1e7)) {
+    st.cells_moved = 0;
+    st.cells_out = dem.valid_cells;
+    st.refused = "the moved DEM would span " + std::to_string(static_cast<long long>(width)) +
+                 " x " + std::to_string(static_cast<long long>(height)) +
+                 " cells, more than 4 times the chain's";
+    return dem;
+  }
   out.min = {min_x, min_y};
   out.max = {max_x, max_y};
-  out.width = static_cast<int>(max_x - min_x + 1);
-  out.height = static_cast<int>(max_y - min_y + 1);
+  out.width = static_cast<int>(width);
+  out.height = static_cast<int>(height);
   const std::size_t n = static_cast<std::size_t>(out.width) * out.height;
   // Four shares per moved cell, gathered by output pixel: a sparse sum, as a DEM's published
-  // cells are a small part of its raster (dense sums of a 300 m loop's raster took 90 ms).
+  // cells are a small part of its raster (docs/serve.md: dense sums took four times as long).
   std::vector<Share> shares;
   shares.reserve(4 * moved.size());
   for (const MovedCell& m : moved) {

@@ -8,6 +8,7 @@
 // cannot do is pull apart two passes that the chain fused into one cell (replay's re-fusion can).
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "io/DemLayers.hpp"
@@ -23,13 +24,17 @@ struct DemWarpStats {
   double max_shift_m = 0.0;     ///< largest horizontal move of a cell [m]
   double median_shift_m = 0.0;  ///< median horizontal move [m]
   double ms = 0.0;              ///< time it took, set by the caller that measures it [ms]
+  /// Why the chain's DEM was kept unmoved although the graph was solved (else empty): the
+  /// corrections would spread it over more than 4 times its raster (a graph gone wrong).
+  std::string refused;
 };
 
 /// `dem` (the chain's, with its frame layer) moved with `graph`'s correction of each cell's
 /// frame among `results`. A cell whose frame has no solved pose keeps the chain's place. An
 /// output cell is published when the moved cells cover at least half of it (bilinear weights);
 /// its height and σ are the covered cells' inverse-variance mean, its count their weighted
-/// mean. Returns `dem` unchanged when the graph is not solved or `dem` has no frame layer.
+/// mean. Returns `dem` unchanged when the graph is not solved, `dem` has no frame layer, or
+/// the moved raster would exceed 4 times `dem`'s and 10^7 cells (stats->refused says so).
 /// Never throws on data.
 io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameResult>& results,
                              const GraphOutcome& graph, DemWarpStats* stats = nullptr);

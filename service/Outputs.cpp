@@ -163,7 +163,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
                                        {"cells_out", state.dem_moved->cells_out},
                                        {"median_shift_m", state.dem_moved->median_shift_m},
                                        {"max_shift_m", state.dem_moved->max_shift_m},
-                                       {"ms", state.dem_moved->ms}};
+                                       {"ms", state.dem_moved->ms},
+                                       {"refused", state.dem_moved->refused}};
     }
     if (optimised && drift && chained_drift) {
       summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);

@@ -188,6 +188,22 @@ TEST(DemWarp, AttitudeUncertaintyGrowsWithTheLeverArm) {
   EXPECT_NEAR(sigma_at(20, 49), std::sqrt(0.05 * 0.05 + std::pow(0.01 * 1.95, 2)), 1e-5);
 }
 
+TEST(DemWarp, CorrectionsThatTearTheMapApartKeepTheChainsDem) {
+  // Frame 1's correction throws its half 7 km away: the raster would be millions of times the
+  // chain's; the chain's DEM is kept and the stats say why.
+  const DemLayers dem = PlaneDem(30);
+  Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+  far.translation() = Eigen::Vector3d(5000.0, 5000.0, 0.0);
+  const Solved run =
+      TwoFrames({Eigen::Isometry3d::Identity(), far}, Diagonal(1e-3, 0.1), Diagonal(1e-3, 0.1));
+  DemWarpStats stats;
+  const DemLayers kept = WarpDemToGraph(dem, run.results, run.graph, &stats);
+  EXPECT_EQ(kept.elevation_m, dem.elevation_m);
+  EXPECT_EQ(stats.cells_moved, 0u);
+  EXPECT_NE(stats.refused.find("more than 4 times the chain's"), std::string::npos)
+      << stats.refused;
+}
+
 TEST(DemWarp, NothingMovesWithoutASolvedGraphOrTheFramesLayer) {
   const DemLayers dem = PlaneDem();
   Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
