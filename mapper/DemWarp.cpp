@@ -7,6 +7,8 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/Skew.hpp"
+
 namespace rovermap::mapper {
 
 namespace {
@@ -17,9 +19,9 @@ namespace {
 // world about the body, Ad([R, 0]) Σ Ad([R, 0])ᵀ. Kept as the 3 × 3 form in (dy, −dx, 1).
 Eigen::Matrix3d VerticalShareForm(const Eigen::Isometry3d& T_world_body,
                                   const Eigen::Matrix<double, 6, 6>& covariance) {
-  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
-  A.topLeftCorner<3, 3>() = T_world_body.linear();
-  A.bottomRightCorner<3, 3>() = T_world_body.linear();
+  Eigen::Isometry3d about_body = T_world_body;
+  about_body.translation().setZero();
+  const Eigen::Matrix<double, 6, 6> A = core::Adjoint(about_body);
   const Eigen::Matrix<double, 6, 6> left = A * covariance * A.transpose();
   const int idx[3] = {0, 1, 5};
   Eigen::Matrix3d q;

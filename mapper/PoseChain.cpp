@@ -48,8 +48,6 @@ bool IsFiniteRigid(const Eigen::Isometry3d& T) {
   return orthogonality <= 1e-6 && R.determinant() > 0.0;
 }
 
-Matrix6d Adjoint(const Eigen::Isometry3d& T) { return core::Adjoint(T); }
-
 PoseChain::PoseChain(const Eigen::Isometry3d& T_world_body0_odom) {
   if (!IsFiniteRigid(T_world_body0_odom)) {
     throw std::invalid_argument("PoseChain: frame 0 odometry pose is not a finite rigid transform");

@@ -8,6 +8,8 @@
 #include <optional>
 #include <vector>
 
+#include "core/Skew.hpp"
+
 namespace rovermap::mapper {
 
 /// Roll, pitch, yaw [rad] with R = Rz(yaw)·Ry(pitch)·Rx(roll); roll and yaw in [−π, π], pitch
@@ -38,10 +40,9 @@ bool IsFiniteRigid(const Eigen::Isometry3d& T);
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
-/// Adjoint of `T` for perturbations ordered [rx ry rz tx ty tz] with the convention of
-/// RegistrationResult (left: T' = (Exp(δr), δt) ∘ T): a right perturbation ξ of T equals the
-/// left perturbation Ad(T)·ξ. Ad = [[R, 0], [[t]×R, R]].
-Matrix6d Adjoint(const Eigen::Isometry3d& T);
+/// Adjoint of `T` (core/Skew.hpp), in RegistrationResult's convention (left: T' = (Exp(δr),
+/// δt) ∘ T): a right perturbation ξ of T equals the left perturbation Ad(T)·ξ.
+using core::Adjoint;
 
 /// One frame of the chain. The increments are T_{body k−1}_{body k}: they map points of
 /// frame k into frame k−1 (registration of frame k onto frame k−1).

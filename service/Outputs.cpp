@@ -81,11 +81,6 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
                             RunInfo run, const eval::EvalOptions& eval_options,
                             const std::function<void(const std::string&)>& after_file,
                             terrain::TerrainCache* terrain_cache) {
-  if (state.move_dem_with_graph && state.graph && state.graph->solution.solved) {
-    OutputState moved = state;  // the publisher moves its own state, without this copy
-    MoveDemWithGraph(&moved);
-    return WriteOutputs(out_dir, moved, std::move(run), eval_options, after_file, terrain_cache);
-  }
   const auto done = [&](const char* name) {
     if (after_file) after_file(name);
   };

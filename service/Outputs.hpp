@@ -31,8 +31,8 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& 
 /// throws on data.
 void MoveDemWithGraph(OutputState* state);
 
-/// The same from an OutputState taken before (the daemon writes it on a thread of its own); a
-/// state still to be moved (MoveDemWithGraph) is moved on a copy.
+/// The same from an OutputState taken before (the daemon writes it on a thread of its own,
+/// after MoveDemWithGraph): the DEM is written as `state.dem` holds it.
 /// Touches nothing but `state`, `out_dir` and `terrain_cache`: when given, the terrain layers
 /// are computed anew only in the tiles whose heights changed since its last use (the daemon
 /// keeps one for its publications).

@@ -61,6 +61,22 @@ int CountLines(const std::string& text, const std::string& prefix,
 
 class Serve : public rovermap::testing::ServeFixture {
  protected:
+  // A simulated cloud loop (`sets`: the sim keys) in dir_/name, with its gnss.csv.
+  fs::path SimulatedLoop(const std::string& name, const std::string& sets) {
+    const fs::path seq = dir_ / name;
+    const auto sim = Rovermap("simulate --out " + seq.string() +
+                              " --set sim.sensor=cloud --set sim.path=loop " + sets);
+    EXPECT_EQ(sim.status, 0) << sim.err;
+    return seq;
+  }
+
+  // An inbox holding every one of `frames` frames of `sequence` and its gnss.csv.
+  fs::path InboxWithFixes(const fs::path& sequence, std::size_t frames, const std::string& name) {
+    const fs::path inbox = MakeInbox(sequence, frames, name);
+    Drop(inbox / "gnss.csv", Slurp(sequence / "gnss.csv"));
+    return inbox;
+  }
+
   fs::path Replay(const fs::path& sequence, const std::vector<std::string>& sets = {}) {
     const fs::path out = dir_ / "replay";
     std::string args = "replay " + sequence.string() + " --out " + out.string();
@@ -579,15 +595,13 @@ TEST_F(Serve, GnssFixesInTheInboxGiveTheGraphsTrajectory) {
 // 7.7 cm, the chain's 9.2 cm, replay's 7.8 cm).
 TEST_F(Serve, WithTheGraphTheDemIsMovedOntoItsPoses) {
   if (rovermap::testing::kSanitizedBuild) GTEST_SKIP() << "statistics: the Release suite";
-  const fs::path seq = dir_ / "seq";
-  ASSERT_EQ(Rovermap("simulate --out " + seq.string() +
-                     " --set sim.sensor=cloud --set sim.frames=60 --set sim.frame_rate_hz=1"
-                     " --set sim.speed_m_s=2 --set sim.terrain_size_m=120"
-                     " --set sim.terrain_cell_m=0.2 --set sim.turn_radius_m=40 --set sim.path=loop"
-                     " --set sim.start_y_m=-40 --set sim.odom_scale_error=0.05"
-                     " --set sim.gnss_every_frames=5 --set sim.gnss_outlier_fraction=0.05")
-                .status,
-            0);
+  const fs::path seq = SimulatedLoop(
+      "seq",
+      "--set sim.frames=60 --set sim.frame_rate_hz=1 --set sim.speed_m_s=2"
+      " --set sim.terrain_size_m=120 --set sim.terrain_cell_m=0.2 --set sim.turn_radius_m=40"
+      " --set sim.start_y_m=-40 --set sim.odom_scale_error=0.05 --set sim.gnss_every_frames=5"
+      " --set sim.gnss_outlier_fraction=0.05");
+  ASSERT_FALSE(HasFailure());
   const std::string cells = " --set dem.cell_size_m=0.2";  // the poses' test, not the detail's
   const fs::path fused = dir_ / "fused", chain = dir_ / "chain";
   ASSERT_EQ(Rovermap("replay " + seq.string() + " --out " + fused.string() + cells).status, 0);
@@ -595,8 +609,7 @@ TEST_F(Serve, WithTheGraphTheDemIsMovedOntoItsPoses) {
                      " --set graph.enabled=false")
                 .status,
             0);
-  const fs::path inbox = MakeInbox(seq, 60, "inbox");
-  Drop(inbox / "gnss.csv", Slurp(seq / "gnss.csv"));
+  const fs::path inbox = InboxWithFixes(seq, 60, "inbox");
   const fs::path out = dir_ / "out";
   const pid_t pid = Start(inbox, out, "log", {"--set", "dem.cell_size_m=0.2"});
   ASSERT_FALSE(WaitForNext(out, 60).is_null()) << Slurp(dir_ / "log");
@@ -651,31 +664,24 @@ TEST_F(Serve, WithTheGraphTheDemIsMovedOntoItsPoses) {
 // than serve's window makes that solve whole.
 TEST_F(Serve, ALoopsRevisitIsKeptAcrossARestartAndSolvedWholeBeyondTheWindow) {
   if (rovermap::testing::kSanitizedBuild) GTEST_SKIP() << "80 frames: the Release suite";
-  const fs::path seq = dir_ / "loop";
-  ASSERT_EQ(Rovermap("simulate --out " + seq.string() +
-                     " --set sim.sensor=cloud --set sim.cloud_stride_px=3 --set sim.frames=80"
-                     " --set sim.speed_m_s=1.2 --set sim.path=loop --set sim.terrain_size_m=60"
-                     " --set sim.gnss_every_frames=10")
-                .status,
-            0);
+  const fs::path seq =
+      SimulatedLoop("loop",
+                    "--set sim.cloud_stride_px=3 --set sim.frames=80 --set sim.speed_m_s=1.2"
+                    " --set sim.terrain_size_m=60 --set sim.gnss_every_frames=10");
+  ASSERT_FALSE(HasFailure());
   const std::vector<std::string> keys = {
       "--set", "revisit.every_m=5",       "--set", "revisit.window_m=10",
       "--set", "revisit.min_gap_m=20",    "--set", "revisit.search_m=2",
       "--set", "serve.checkpoint_share=0"};  // snapshots every 10 frames
   const fs::path whole = dir_ / "whole";
   // GNSS fixes every 6 m (σ 0.5 m) keep the graph solved at every publication from the start.
-  const auto inbox_of = [&](const std::string& name) {
-    const fs::path inbox = MakeInbox(seq, 80, name);
-    Drop(inbox / "gnss.csv", Slurp(seq / "gnss.csv"));
-    return inbox;
-  };
-  const pid_t a = Start(inbox_of("inbox-whole"), whole, "log-whole", keys);
+  const pid_t a = Start(InboxWithFixes(seq, 80, "inbox-whole"), whole, "log-whole", keys);
   ASSERT_FALSE(WaitForNext(whole, 80).is_null()) << Slurp(dir_ / "log-whole");
   Stop(a);
   const nlohmann::json g = nlohmann::json::parse(Slurp(whole / "summary.json"))["graph"];
   ASSERT_EQ(g["revisits_used"], 1) << g.dump(2);  // frames 56-72 onto frame 18
 
-  const fs::path inbox = inbox_of("inbox");
+  const fs::path inbox = InboxWithFixes(seq, 80, "inbox");
   const fs::path out = dir_ / "out";
   EXPECT_EQ(WaitExit(Start(inbox, out, "log", keys, "frame:processed:45")), 128 + SIGKILL);
   const pid_t b = Start(inbox, out, "log", keys);
@@ -696,7 +702,7 @@ TEST_F(Serve, ALoopsRevisitIsKeptAcrossARestartAndSolvedWholeBeyondTheWindow) {
   const fs::path windowed = dir_ / "windowed";
   std::vector<std::string> window = keys;
   window.insert(window.end(), {"--set", "serve.graph_window_frames=20"});
-  const pid_t c = Start(inbox_of("inbox-window"), windowed, "log-window", window);
+  const pid_t c = Start(InboxWithFixes(seq, 80, "inbox-window"), windowed, "log-window", window);
   ASSERT_FALSE(WaitForNext(windowed, 80).is_null()) << Slurp(dir_ / "log-window");
   Stop(c);
   const std::string wlog = Slurp(dir_ / "log-window");
