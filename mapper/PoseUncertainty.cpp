@@ -13,18 +13,27 @@ using core::kRadToDeg;
 constexpr double kChi2Six2Sigma = 12.85;
 }  // namespace
 
+Matrix6d UserAxesJacobian(const Eigen::Isometry3d& T_world_body) {
+  const Eigen::Matrix3d R = T_world_body.linear();
+  Matrix6d J = Matrix6d::Zero();
+  J(0, 0) = 1.0;                    // roll: about the body's x
+  J(1, 1) = 1.0;                    // pitch: about the body's y
+  J.block<1, 3>(2, 0) = R.row(2);   // yaw: about the world's z
+  J.bottomRightCorner<3, 3>() = R;  // position: world axes
+  return J;
+}
+
 PoseSigmas SigmasOf(const ChainStep& step) {
-  const Eigen::Matrix3d R = step.T_world_body.linear();
-  const Eigen::Matrix3d position = R * step.covariance.bottomRightCorner<3, 3>() * R.transpose();
-  const Eigen::Matrix3d attitude_world = R * step.covariance.topLeftCorner<3, 3>() * R.transpose();
-  auto sd = [](double variance) { return std::sqrt(std::max(0.0, variance)); };
+  const Matrix6d J = UserAxesJacobian(step.T_world_body);
+  const Vector6d variance = (J * step.covariance * J.transpose()).diagonal();
+  auto sd = [](double v) { return std::sqrt(std::max(0.0, v)); };
   PoseSigmas s;
-  s.x_m = sd(position(0, 0));
-  s.y_m = sd(position(1, 1));
-  s.z_m = sd(position(2, 2));
-  s.roll_deg = sd(step.covariance(0, 0)) * kRadToDeg;
-  s.pitch_deg = sd(step.covariance(1, 1)) * kRadToDeg;
-  s.yaw_deg = sd(attitude_world(2, 2)) * kRadToDeg;
+  s.roll_deg = sd(variance(0)) * kRadToDeg;
+  s.pitch_deg = sd(variance(1)) * kRadToDeg;
+  s.yaw_deg = sd(variance(2)) * kRadToDeg;
+  s.x_m = sd(variance(3));
+  s.y_m = sd(variance(4));
+  s.z_m = sd(variance(5));
   return s;
 }
 
@@ -40,6 +49,7 @@ std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>&
                                                  bool against_world) {
   std::optional<std::size_t> first;
   std::vector<double> nees;
+  Vector6d axis_sum = Vector6d::Zero();  // in drift.csv's order: x, y, z, roll, pitch, yaw
   for (std::size_t k = 0; k < results.size() && k < steps.size(); ++k) {
     const FrameResult& r = results[k];
     if (!r.T_world_body_truth) continue;
@@ -58,7 +68,14 @@ std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>&
     const Eigen::LDLT<Matrix6d> ldlt(steps[k].covariance);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) continue;
     const double value = xi.dot(ldlt.solve(xi));
-    if (std::isfinite(value)) nees.push_back(value);
+    if (!std::isfinite(value)) continue;
+    nees.push_back(value);
+    const Matrix6d J = UserAxesJacobian(steps[k].T_world_body);
+    const Vector6d error = J * xi;  // roll, pitch, yaw, x, y, z
+    const Vector6d variance = (J * steps[k].covariance * J.transpose()).diagonal();
+    const Vector6d ratio = error.cwiseAbs2().cwiseQuotient(variance);
+    axis_sum.head<3>() += ratio.tail<3>();
+    axis_sum.tail<3>() += ratio.head<3>();
   }
   if (nees.empty()) return std::nullopt;
   CalibrationCheck out;
@@ -71,6 +88,7 @@ std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>&
   }
   out.within_2sigma = static_cast<double>(within) / static_cast<double>(nees.size());
   out.nees_mean = sum / static_cast<double>(nees.size());
+  out.axis_ratio = axis_sum / static_cast<double>(nees.size());
   std::nth_element(nees.begin(), nees.begin() + static_cast<long>(nees.size() / 2), nees.end());
   out.nees_median = nees[nees.size() / 2];
   return out;

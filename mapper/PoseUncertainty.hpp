@@ -19,6 +19,11 @@ struct PoseSigmas {
 /// From ChainStep::covariance (right perturbation in the body frame). Never throws.
 PoseSigmas SigmasOf(const ChainStep& step);
 
+/// The map from the right perturbation ξ of `T_world_body` to drift.csv's axes (world position;
+/// roll and pitch about the body's x and y; yaw about the world's z): SigmasOf's σ are the
+/// square roots of diag(J Σ Jᵀ). Never throws.
+Matrix6d UserAxesJacobian(const Eigen::Isometry3d& T_world_body);
+
 /// How the true poses fall against the chained covariances (frames with ground truth, frame 0
 /// and frames with a singular covariance left out). The error of frame k is the right
 /// perturbation ξ with T_true = T_k ∘ (Exp(ξr), ξt), the truth moved so that frame 0 coincides
@@ -30,6 +35,11 @@ struct CalibrationCheck {
   double within_2sigma = 0.0;
   double nees_mean = 0.0;  ///< mean NEES; 6 when calibrated
   double nees_median = 0.0;
+  /// Axis by axis, in drift.csv's σ axes (world x, y, z; roll, pitch; world yaw): the mean of
+  /// error² / σ² over the frames; 1 when that axis is calibrated, above 1 too confident (its σ
+  /// √ratio times too small), below 1 cautious. A 6-D NEES of 6 can hide one axis too
+  /// confident behind others too cautious.
+  Vector6d axis_ratio = Vector6d::Zero();
 };
 
 /// nullopt when no frame qualifies. Never throws.

@@ -214,11 +214,19 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
     check = CheckCalibration(results);
   }
   if (check) {
+    const Vector6d& a = check->axis_ratio;
     summary["pose_uncertainty"] = {{"frames", check->frames},
                                    {"within_2sigma", check->within_2sigma},
                                    {"nees_mean", Number(check->nees_mean)},
                                    {"nees_median", Number(check->nees_median)},
-                                   {"nees_expected", 6}};
+                                   {"nees_expected", 6},
+                                   {"axis_error_ratio",
+                                    {{"x", Number(a(0))},
+                                     {"y", Number(a(1))},
+                                     {"z", Number(a(2))},
+                                     {"roll", Number(a(3))},
+                                     {"pitch", Number(a(4))},
+                                     {"yaw", Number(a(5))}}}};
   }
   for (const auto& [key, value] : run.extra.items()) summary[key] = value;
   return summary;

@@ -64,6 +64,7 @@ TEST(PoseUncertainty, CalibratedCovarianceHoldsTheTruthWithin2Sigma) {
   EXPECT_NEAR(check->within_2sigma, 0.9545, 0.01);
   EXPECT_NEAR(check->nees_mean, 6.0, 0.3);
   EXPECT_NEAR(check->nees_median, 5.35, 0.3);  // χ²₆ median
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(check->axis_ratio(i), 1.0, 0.1) << "axis " << i;
 }
 
 TEST(PoseUncertainty, OptimisticCovarianceIsCaught) {
@@ -71,6 +72,24 @@ TEST(PoseUncertainty, OptimisticCovarianceIsCaught) {
   ASSERT_TRUE(check.has_value());
   EXPECT_LT(check->within_2sigma, 0.6);
   EXPECT_NEAR(check->nees_mean, 24.0, 2.0);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(check->axis_ratio(i), 4.0, 0.4) << "axis " << i;
+}
+
+// One axis too confident behind the others too cautious: the 6-D figures look calibrated, the
+// axes do not. The height (the chain turns about z, so body z is world z) stated with half its
+// σ, every other axis with twice its σ.
+TEST(PoseUncertainty, AxisRatiosFindAnAxisTheWholeHides) {
+  const Matrix6d actual = Covariance();
+  Vector6d scale = Vector6d::Constant(2.0);
+  scale(5) = 0.5;
+  const Matrix6d stated = scale.asDiagonal() * actual * scale.asDiagonal();
+  const auto check = CheckCalibration(Chain(4001, stated, actual, 4));
+  ASSERT_TRUE(check.has_value());
+  EXPECT_GT(check->within_2sigma, 0.85);  // the whole passes for calibrated
+  EXPECT_NEAR(check->nees_mean, 5.25, 0.4);
+  EXPECT_NEAR(check->axis_ratio(2), 4.0, 0.4);  // z: σ half what it should be
+  for (const int axis : {0, 1, 3, 4, 5})
+    EXPECT_NEAR(check->axis_ratio(axis), 0.25, 0.03) << "axis " << axis;
 }
 
 TEST(PoseUncertainty, NoTruthOrSingularCovarianceIsLeftOut) {
