@@ -483,6 +483,10 @@ std::vector<KeyEntry> BuildRegistry() {
             "a ready frame further than this beyond the next expected is rejected");
   serve.Int("publish_every", &V::publish_every, "frames", AtLeast(1),
             "publish the outputs after this many frames (and when idle, and on exit)");
+  serve.Double("publish_share", &V::publish_share, "fraction", Bounds{0, false, 1, false},
+               "largest share of the processing time publications may take while frames queue");
+  serve.Int("publish_max_every", &V::publish_max_every, "frames", AtLeast(1),
+            "a publication is never put off longer than this many frames");
   serve.Int("graph_window_frames", &V::graph_window_frames, "frames", AtLeast(0),
             "the pose graph solved over this many last frames at each publication; 0 = all");
   serve.Int("checkpoint_every", &V::checkpoint_every, "frames", AtLeast(1),

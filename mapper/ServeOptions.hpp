@@ -18,6 +18,15 @@ struct ServeOptions {
   /// [frames] publish the outputs (docs/design.md §6) after this many frames, when the queue
   /// runs dry with frames done since the last publication, and on exit.
   int publish_every = 10;
+  /// [fraction] while frames are queued, the largest share of the frames' processing time the
+  /// publications may take (handing the state over on the daemon's thread, and writing it on
+  /// the publisher's, which shares the cores with the next frames): a publication grows with
+  /// the map, so one that is due waits until the frames since the last took 1/publish_share
+  /// times as long as that one did; 0 = a publication every publish_every. A queue that runs
+  /// dry is published at once whatever this says.
+  double publish_share = 0.05;
+  /// [frames] a publication is never put off longer than this many frames.
+  int publish_max_every = 100;
   /// [frames] the pose graph solved at each publication over this many last frames, the
   /// earlier ones held where the last solve put them (bounded time per publication); 0 =
   /// every frame each time.
@@ -38,13 +47,28 @@ struct ServeOptions {
   double status_interval_s = 1.0;
 };
 
-/// Whether a snapshot is due after `frames` frames that took `frames_ms` [ms] since the last
-/// snapshot, which took `last_snapshot_ms` [ms] (0 before the first).
+/// Whether a periodic write is due after `frames` frames that took `frames_ms` [ms] since the
+/// last one, which took `last_ms` [ms] (0 before the first): every `every` frames at least,
+/// then only once the frames took 1/`share` times as long as the last write (`share` 0: no
+/// wait), and never later than `max_every` frames.
+inline bool ShareDue(int frames, double frames_ms, double last_ms, int every, double share,
+                     int max_every) {
+  if (frames < every) return false;
+  return share <= 0.0 || frames >= max_every || last_ms <= share * frames_ms;
+}
+
+/// A snapshot (checkpoint_every, checkpoint_share, checkpoint_max_every).
 inline bool SnapshotDue(const ServeOptions& o, int frames, double frames_ms,
                         double last_snapshot_ms) {
-  if (frames < o.checkpoint_every) return false;
-  return o.checkpoint_share <= 0.0 || frames >= o.checkpoint_max_every ||
-         last_snapshot_ms <= o.checkpoint_share * frames_ms;
+  return ShareDue(frames, frames_ms, last_snapshot_ms, o.checkpoint_every, o.checkpoint_share,
+                  o.checkpoint_max_every);
+}
+
+/// A publication while frames are queued (publish_every, publish_share, publish_max_every).
+inline bool PublicationDue(const ServeOptions& o, int frames, double frames_ms,
+                           double last_publication_ms) {
+  return ShareDue(frames, frames_ms, last_publication_ms, o.publish_every, o.publish_share,
+                  o.publish_max_every);
 }
 
 }  // namespace rovermap::mapper

@@ -168,7 +168,7 @@ void Daemon::Run(const std::atomic<int>& stop) {
     if (Step(files)) continue;
     // Idle (the queue ran dry or waits on a gap): whoever monitors sees the latest, the maps
     // included: the frames since the last publication need not wait for publish_every more.
-    if (since_publish_ > 0) Publish();
+    if (unwritten_frames_ > 0) Publish();
     if (status_stale_) WriteStatus("running", waiting_);
     double wait_s = watcher.watching() ? std::min(o.poll_interval_s, 0.2) : o.poll_interval_s;
     if (gap_since_) {
@@ -421,13 +421,21 @@ void Daemon::Commit(const FrameResult* result, const std::string& reject_reason)
     writes << ", checkpoint " << last_snapshot_ms_ << " ms ("
            << checkpoint_->snapshot_bytes() / 1000000.0 << " MB)";
   }
+  ++unwritten_frames_;
+  unwritten_ms_ += result->time.load_ms + result->time.total_ms;
   if (++since_publish_ >= setup_.serve.publish_every) {
-    const auto start = Clock::now();
+    // What the last publication cost: its hand-over here and its writing beside the frames.
     const double last_write_ms = publisher_.last_write_ms();
-    Publish();
-    writes << ", outputs handed to the publisher in " << MsBetween(start, Clock::now()) << " ms";
-    if (last_write_ms > 0.0)
-      writes << " (the last publication wrote for " << last_write_ms << " ms)";
+    const bool write = PublicationDue(setup_.serve, unwritten_frames_, unwritten_ms_,
+                                      last_handover_ms_ + last_write_ms);
+    const auto start = Clock::now();
+    Publish(write);
+    if (write) {
+      last_handover_ms_ = MsBetween(start, Clock::now());
+      writes << ", outputs handed to the publisher in " << last_handover_ms_ << " ms";
+      if (last_write_ms > 0.0)
+        writes << " (the last publication wrote for " << last_write_ms << " ms)";
+    }
   }
   if (!writes.str().empty())
     Log("serve: after frame " + std::to_string(result->index) + writes.str());
@@ -453,9 +461,47 @@ void Daemon::RejectLate(const FrameFiles& files) {
   }
 }
 
-void Daemon::Publish() {
-  since_publish_ = 0;
+void Daemon::Publish(bool write) {
   if (mapper_->results().empty()) return;
+  // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
+  // published trajectory is its own, and so is the DEM's place (moved with it, not fused again:
+  // mapper/DemWarp); the OctoMap stays the chain's. No frame since the last solve (a dry queue
+  // right after one that was not written): that solve's outcome, not a second one.
+  std::optional<GraphOutcome> graph;
+  if (since_publish_ == 0 && unwritten_graph_) {
+    graph = std::move(unwritten_graph_);
+  } else {
+    const std::vector<io::GnssFix> fixes = InboxFixes();
+    try {
+      graph = graph_run_->Solve(
+          *mapper_, sequence_.sensor_type, fixes, reference_unusable_,
+          static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
+    } catch (const std::invalid_argument& e) {
+      Log(std::string("serve: pose graph not solved: ") + e.what());
+    }
+    if (graph && graph->solution.solved) {
+      const graph::PoseGraphResult& g = graph->solution;
+      std::ostringstream line;
+      line << "serve: pose graph over " << mapper_->results().size() << " frames";
+      if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
+      if (graph->whole_for_loop_from) {
+        line << " (whole: a revisit reaches frame " << *graph->whole_for_loop_from
+             << ", before the window)";
+      }
+      line << ": " << g.fixes_used << " of " << graph->fixes << " GNSS fixes, " << g.poses_used
+           << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
+           << std::setprecision(0) << g.solve_ms << " ms";
+      Log(line.str());
+    }
+  }
+  since_publish_ = 0;
+  unwritten_graph_.reset();
+  if (!write) {
+    unwritten_graph_ = std::move(graph);
+    return;
+  }
+  unwritten_frames_ = 0;
+  unwritten_ms_ = 0.0;
   RunInfo run;
   run.sequence = setup_.inbox.string();
   // Frames per second over the frames' own processing time: the daemon idles between frames.
@@ -464,32 +510,10 @@ void Daemon::Publish() {
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
-  // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
-  // published trajectory is its own, and so is the DEM's place (moved with it, not fused again:
-  // mapper/DemWarp); the OctoMap stays the chain's.
   OutputState state(*mapper_);
-  const std::vector<io::GnssFix> fixes = InboxFixes();
-  try {
-    state.graph =
-        graph_run_->Solve(*mapper_, sequence_.sensor_type, fixes, reference_unusable_,
-                          static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
-  } catch (const std::invalid_argument& e) {
-    Log(std::string("serve: pose graph not solved: ") + e.what());
-  }
+  state.graph = std::move(graph);
   if (state.graph && state.graph->solution.solved) {
     state.move_dem_with_graph = true;  // on the publisher's thread (mapper/DemWarp)
-    const graph::PoseGraphResult& g = state.graph->solution;
-    std::ostringstream line;
-    line << "serve: pose graph over " << mapper_->results().size() << " frames";
-    if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
-    if (state.graph->whole_for_loop_from) {
-      line << " (whole: a revisit reaches frame " << *state.graph->whole_for_loop_from
-           << ", before the window)";
-    }
-    line << ": " << g.fixes_used << " of " << state.graph->fixes << " GNSS fixes, " << g.poses_used
-         << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
-         << std::setprecision(0) << g.solve_ms << " ms";
-    Log(line.str());
   }
   // The state is taken here, between frames; the files are written beside the next frames.
   publisher_.Publish(setup_.out, std::move(state), std::move(run), setup_.eval,

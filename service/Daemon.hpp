@@ -114,7 +114,9 @@ class Daemon {
   void DeclareMissing(std::size_t index, const io::InboxFrameFiles& files);
   void Commit(const FrameResult* result, const std::string& reject_reason);
   void RejectLate(const FrameFiles& files);
-  void Publish();
+  /// Solves the pose graph (at publish_every frames, whatever the outputs do, so that the
+  /// solves a windowed graph builds on do not depend on timing) and, with `write`, publishes.
+  void Publish(bool write = true);
   /// The fixes of the inbox's gnss.csv (none without it; the last readable ones while it is
   /// being written and a line is broken).
   std::vector<io::GnssFix> InboxFixes();
@@ -140,7 +142,11 @@ class Daemon {
   std::unique_ptr<Checkpoint> checkpoint_;
   DaemonState state_;
   std::optional<Clock::time_point> gap_since_;
-  int since_publish_ = 0;
+  int since_publish_ = 0;                        // frames since the last solve (at publish_every)
+  int unwritten_frames_ = 0;                     // frames since the last publication written
+  double unwritten_ms_ = 0.0;                    // their processing time
+  double last_handover_ms_ = 0.0;                // the last publication's share on this thread
+  std::optional<GraphOutcome> unwritten_graph_;  // the last solve, when not yet written
   int since_checkpoint_ = 0;
   double since_checkpoint_ms_ = 0.0;  // the frames' processing time since the last snapshot
   double last_snapshot_ms_ = 0.0;

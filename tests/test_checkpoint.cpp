@@ -239,6 +239,19 @@ TEST(SnapshotDue, WaitsForItsShareOfTheProcessingTimeUpToTheLimit) {
   EXPECT_TRUE(mapper::SnapshotDue(o, 10, 1.0, 1e6));
 }
 
+// The publications wait for their share the same way, on their own keys (every 10, share
+// 0.05, at most every 100): the last one cost 100 ms; 13 frames of 150 ms are not enough, 14 are.
+TEST(PublicationDue, WaitsForItsShareOnItsOwnKeys) {
+  mapper::ServeOptions o;
+  o.checkpoint_share = 0.0;  // not the snapshots' keys
+  EXPECT_FALSE(mapper::PublicationDue(o, 9, 1e6, 0.0));
+  EXPECT_FALSE(mapper::PublicationDue(o, 13, 13 * 150.0, 100.0));
+  EXPECT_TRUE(mapper::PublicationDue(o, 14, 14 * 150.0, 100.0));
+  EXPECT_TRUE(mapper::PublicationDue(o, 100, 100.0, 1e6));
+  o.publish_share = 0.0;
+  EXPECT_TRUE(mapper::PublicationDue(o, 10, 1.0, 1e6));
+}
+
 // Every field set away from its default, so that a field the encoding leaves out (or reads
 // into another) shows.
 mapper::FrameResult EveryFieldSet() {

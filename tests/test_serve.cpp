@@ -271,6 +271,37 @@ TEST_F(Serve, SnapshotsWaitForTheirShareUpToTheLimit) {
   ExpectSameOutputs(replay, out);
 }
 
+// Publications put off for their share of the processing time while frames queue (here a
+// share no publication fits in), up to publish_max_every frames: after frame 0 (the first) and
+// frame 3 only, then the dry queue's; with the share at 0, after every frame. The outputs are
+// replay's either way.
+TEST_F(Serve, PublicationsWaitForTheirShareUpToTheLimit) {
+  const fs::path replay = Replay(kTinyCloud);
+  for (const char* share : {"0.000001", "0"}) {
+    SCOPED_TRACE(share);
+    const fs::path inbox = MakeInbox(kTinyCloud, 5, std::string("inbox_") + share);
+    const fs::path out = dir_ / (std::string("out_") + share);
+    const std::string log = std::string("log_") + share;
+    const pid_t pid = Start(
+        inbox, out, log,
+        {"--set", "serve.publish_every=1", "--set", std::string("serve.publish_share=") + share,
+         "--set", "serve.publish_max_every=3", "--set", "serve.checkpoint_every=100"});
+    ASSERT_FALSE(WaitForNext(out, 5).is_null()) << Slurp(dir_ / log);
+    Stop(pid);
+    const std::string text = Slurp(dir_ / log);
+    const int published = CountLines(text, "serve: after frame ", {"outputs handed"});
+    if (std::string(share) == "0") {
+      EXPECT_EQ(published, 5) << text;
+    } else {
+      EXPECT_EQ(published, 2) << text;
+      EXPECT_NE(text.find("serve: after frame 0, outputs handed"), std::string::npos) << text;
+      EXPECT_NE(text.find("serve: after frame 3, outputs handed"), std::string::npos) << text;
+    }
+    ExpectSameOutputs(replay, out);
+    EXPECT_EQ(nlohmann::json::parse(Slurp(out / "summary.json"))["frames"], 5);
+  }
+}
+
 // kill -9 at each kind of point, then a restart on the same OUT: the result is the
 // uninterrupted run's, and every frame is logged as done exactly once over the two runs.
 TEST_F(Serve, KillNineAtAnyPointThenRestartLosesNothing) {
