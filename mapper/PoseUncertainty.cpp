@@ -16,24 +16,23 @@ constexpr double kChi2Six2Sigma = 12.85;
 Matrix6d UserAxesJacobian(const Eigen::Isometry3d& T_world_body) {
   const Eigen::Matrix3d R = T_world_body.linear();
   Matrix6d J = Matrix6d::Zero();
-  J(0, 0) = 1.0;                    // roll: about the body's x
-  J(1, 1) = 1.0;                    // pitch: about the body's y
-  J.block<1, 3>(2, 0) = R.row(2);   // yaw: about the world's z
-  J.bottomRightCorner<3, 3>() = R;  // position: world axes
+  J.topRightCorner<3, 3>() = R;    // position: world axes
+  J(3, 0) = 1.0;                   // roll: about the body's x
+  J(4, 1) = 1.0;                   // pitch: about the body's y
+  J.block<1, 3>(5, 0) = R.row(2);  // yaw: about the world's z
   return J;
 }
 
 PoseSigmas SigmasOf(const ChainStep& step) {
   const Matrix6d J = UserAxesJacobian(step.T_world_body);
-  const Vector6d variance = (J * step.covariance * J.transpose()).diagonal();
-  auto sd = [](double v) { return std::sqrt(std::max(0.0, v)); };
+  const Vector6d sd = (J * step.covariance * J.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
   PoseSigmas s;
-  s.roll_deg = sd(variance(0)) * kRadToDeg;
-  s.pitch_deg = sd(variance(1)) * kRadToDeg;
-  s.yaw_deg = sd(variance(2)) * kRadToDeg;
-  s.x_m = sd(variance(3));
-  s.y_m = sd(variance(4));
-  s.z_m = sd(variance(5));
+  s.x_m = sd(0);
+  s.y_m = sd(1);
+  s.z_m = sd(2);
+  s.roll_deg = sd(3) * kRadToDeg;
+  s.pitch_deg = sd(4) * kRadToDeg;
+  s.yaw_deg = sd(5) * kRadToDeg;
   return s;
 }
 
@@ -49,7 +48,7 @@ std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>&
                                                  bool against_world) {
   std::optional<std::size_t> first;
   std::vector<double> nees;
-  Vector6d axis_sum = Vector6d::Zero();  // in drift.csv's order: x, y, z, roll, pitch, yaw
+  Vector6d axis_sum = Vector6d::Zero();  // x, y, z, roll, pitch, yaw
   for (std::size_t k = 0; k < results.size() && k < steps.size(); ++k) {
     const FrameResult& r = results[k];
     if (!r.T_world_body_truth) continue;
@@ -71,11 +70,8 @@ std::optional<CalibrationCheck> CheckCalibration(const std::vector<FrameResult>&
     if (!std::isfinite(value)) continue;
     nees.push_back(value);
     const Matrix6d J = UserAxesJacobian(steps[k].T_world_body);
-    const Vector6d error = J * xi;  // roll, pitch, yaw, x, y, z
     const Vector6d variance = (J * steps[k].covariance * J.transpose()).diagonal();
-    const Vector6d ratio = error.cwiseAbs2().cwiseQuotient(variance);
-    axis_sum.head<3>() += ratio.tail<3>();
-    axis_sum.tail<3>() += ratio.head<3>();
+    axis_sum += (J * xi).cwiseAbs2().cwiseQuotient(variance);
   }
   if (nees.empty()) return std::nullopt;
   CalibrationCheck out;

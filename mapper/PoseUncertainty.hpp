@@ -19,9 +19,9 @@ struct PoseSigmas {
 /// From ChainStep::covariance (right perturbation in the body frame). Never throws.
 PoseSigmas SigmasOf(const ChainStep& step);
 
-/// The map from the right perturbation ξ of `T_world_body` to drift.csv's axes (world position;
-/// roll and pitch about the body's x and y; yaw about the world's z): SigmasOf's σ are the
-/// square roots of diag(J Σ Jᵀ). Never throws.
+/// The map from the right perturbation ξ of `T_world_body` to drift.csv's axes, in its order
+/// (world x, y, z; roll and pitch about the body's x and y; yaw about the world's z): SigmasOf's
+/// σ are the square roots of diag(J Σ Jᵀ). Never throws.
 Matrix6d UserAxesJacobian(const Eigen::Isometry3d& T_world_body);
 
 /// How the true poses fall against the chained covariances (frames with ground truth, frame 0

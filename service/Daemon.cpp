@@ -461,39 +461,39 @@ void Daemon::RejectLate(const FrameFiles& files) {
   }
 }
 
+std::optional<GraphOutcome> Daemon::SolveAndLogGraph() {
+  std::optional<GraphOutcome> graph;
+  try {
+    graph =
+        graph_run_->Solve(*mapper_, sequence_.sensor_type, InboxFixes(), reference_unusable_,
+                          static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
+  } catch (const std::invalid_argument& e) {
+    Log(std::string("serve: pose graph not solved: ") + e.what());
+  }
+  if (!graph || !graph->solution.solved) return graph;
+  const graph::PoseGraphResult& g = graph->solution;
+  std::ostringstream line;
+  line << "serve: pose graph over " << mapper_->results().size() << " frames";
+  if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
+  if (graph->whole_for_loop_from) {
+    line << " (whole: a revisit reaches frame " << *graph->whole_for_loop_from
+         << ", before the window)";
+  }
+  line << ": " << g.fixes_used << " of " << graph->fixes << " GNSS fixes, " << g.poses_used
+       << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
+       << std::setprecision(0) << g.solve_ms << " ms";
+  Log(line.str());
+  return graph;
+}
+
 void Daemon::Publish(bool write) {
   if (mapper_->results().empty()) return;
   // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
   // published trajectory is its own, and so is the DEM's place (moved with it, not fused again:
   // mapper/DemWarp); the OctoMap stays the chain's. No frame since the last solve (a dry queue
   // right after one that was not written): that solve's outcome, not a second one.
-  std::optional<GraphOutcome> graph;
-  if (since_publish_ == 0 && unwritten_graph_) {
-    graph = std::move(unwritten_graph_);
-  } else {
-    const std::vector<io::GnssFix> fixes = InboxFixes();
-    try {
-      graph = graph_run_->Solve(
-          *mapper_, sequence_.sensor_type, fixes, reference_unusable_,
-          static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
-    } catch (const std::invalid_argument& e) {
-      Log(std::string("serve: pose graph not solved: ") + e.what());
-    }
-    if (graph && graph->solution.solved) {
-      const graph::PoseGraphResult& g = graph->solution;
-      std::ostringstream line;
-      line << "serve: pose graph over " << mapper_->results().size() << " frames";
-      if (g.first_solved_frame > 0) line << " (frames " << g.first_solved_frame << "- solved)";
-      if (graph->whole_for_loop_from) {
-        line << " (whole: a revisit reaches frame " << *graph->whole_for_loop_from
-             << ", before the window)";
-      }
-      line << ": " << g.fixes_used << " of " << graph->fixes << " GNSS fixes, " << g.poses_used
-           << " reference matches, " << g.loops_used << " revisits used, " << std::fixed
-           << std::setprecision(0) << g.solve_ms << " ms";
-      Log(line.str());
-    }
-  }
+  std::optional<GraphOutcome> graph =
+      since_publish_ == 0 && unwritten_graph_ ? std::move(unwritten_graph_) : SolveAndLogGraph();
   since_publish_ = 0;
   unwritten_graph_.reset();
   if (!write) {

@@ -117,6 +117,8 @@ class Daemon {
   /// Solves the pose graph (at publish_every frames, whatever the outputs do, so that the
   /// solves a windowed graph builds on do not depend on timing) and, with `write`, publishes.
   void Publish(bool write = true);
+  /// The pose graph over every frame so far with what its sources found (logged when solved).
+  std::optional<GraphOutcome> SolveAndLogGraph();
   /// The fixes of the inbox's gnss.csv (none without it; the last readable ones while it is
   /// being written and a line is broken).
   std::vector<io::GnssFix> InboxFixes();
