@@ -6,45 +6,16 @@
 #include <limits>
 #include <utility>
 
+#include "dem/Morton.hpp"
+
 namespace rovermap::dem {
 namespace {
 
-constexpr unsigned kDepth = 16;  // octomap::OcTree: 16 levels, 16-bit keys
-
-// The 16 bits of `x` spread to every third bit.
-std::uint64_t Spread(std::uint64_t x) {
-  x = (x | x << 16) & 0x0000FF0000FFULL;
-  x = (x | x << 8) & 0x00F00F00F00FULL;
-  x = (x | x << 4) & 0x0C30C30C30C3ULL;
-  return (x | x << 2) & 0x249249249249ULL;
-}
-
-std::uint16_t Compact(std::uint64_t x) {
-  x &= 0x249249249249ULL;
-  x = (x | x >> 2) & 0x0C30C30C30C3ULL;
-  x = (x | x >> 4) & 0x00F00F00F00FULL;
-  x = (x | x >> 8) & 0x0000FF0000FFULL;
-  return static_cast<std::uint16_t>((x | x >> 16) & 0xFFFFULL);
-}
-
-std::uint64_t Morton(const octomap::OcTreeKey& k) {
-  return Spread(k.k[0]) | Spread(k.k[1]) << 1 | Spread(k.k[2]) << 2;
-}
-
-octomap::OcTreeKey FromMorton(std::uint64_t m) {
-  return octomap::OcTreeKey(Compact(m), Compact(m >> 1), Compact(m >> 2));
-}
-
-// The child index below `depth` (0 = root) on the way to `m`: OctoMap's computeChildIdx.
-unsigned ChildIndex(std::uint64_t m, unsigned depth) {
-  return static_cast<unsigned>(m >> (3 * (kDepth - 1 - depth))) & 7U;
-}
-
-// The deepest node two distinct keys' paths share.
-unsigned CommonDepth(std::uint64_t a, std::uint64_t b) {
-  const unsigned highest_bit = 63U - static_cast<unsigned>(__builtin_clzll(a ^ b));
-  return kDepth - 1 - highest_bit / 3;
-}
+using morton::ChildIndex;
+using morton::CommonDepth;
+using morton::FromMorton;
+using morton::kDepth;
+using morton::Morton;
 
 // Ascending LSD radix sort of 48-bit codes, four 12-bit digits.
 void RadixSort48(std::vector<std::uint64_t>* v, std::vector<std::uint64_t>* scratch) {
@@ -150,7 +121,8 @@ void BatchOcTree::CastRay(const octomap::point3d& origin, const octomap::point3d
 }
 
 BatchCounts BatchOcTree::InsertDiscretized(const std::vector<octomap::point3d>& points,
-                                           const octomap::point3d& origin, double max_range) {
+                                           const octomap::point3d& origin, double max_range,
+                                           std::uint32_t frame) {
   BatchCounts counts;
   endpoints_.clear();
   free_.clear();
@@ -198,8 +170,24 @@ BatchCounts BatchOcTree::InsertDiscretized(const std::vector<octomap::point3d>& 
   for (; f != free_.end(); ++f) updates_.push_back(*f << 1);
   counts.occupied_voxels = endpoints_.size();
   counts.free_voxels = updates_.size() - endpoints_.size();
+  TagBlocks(frame);
   Apply();
   return counts;
+}
+
+// The updates are in ascending order, so a block's come together: one look-up per block.
+void BatchOcTree::TagBlocks(std::uint32_t frame) {
+  frame &= ~kOccupiedTag;
+  std::size_t i = 0;
+  while (i < updates_.size()) {
+    const std::uint64_t block = (updates_[i] >> 1) >> (3 * kBlockLevels);
+    bool occupied = false;
+    for (; i < updates_.size() && ((updates_[i] >> 1) >> (3 * kBlockLevels)) == block; ++i)
+      occupied = occupied || (updates_[i] & 1U) != 0;
+    const auto [tag, added] =
+        block_frames_.try_emplace(block, occupied ? frame | kOccupiedTag : frame);
+    if (!added && occupied) tag->second = frame | kOccupiedTag;
+  }
 }
 
 // updateNode(key, occupied, lazy_eval = true) for every update in depth-first order, each

@@ -2,6 +2,7 @@
 
 #include <octomap/AbstractOcTree.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <istream>
@@ -11,12 +12,15 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "dem/OcTreeBytes.hpp"
 #include "dem/QuietStderr.hpp"
 
 namespace rovermap::dem {
 namespace {
+
+constexpr char kTagsMagic[8] = {'R', 'M', 'T', 'A', 'G', 'S', '0', '1'};
 
 void Check(bool ok, const std::string& field, const std::string& rule, double got) {
   if (ok) return;
@@ -44,7 +48,8 @@ OctoMapFusion::OctoMapFusion(const OctoMapOptions& options) : options_(options) 
 }
 
 OctoMapFrameStats OctoMapFusion::InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
-                                             const Eigen::Vector3d& sensor_origin_world) {
+                                             const Eigen::Vector3d& sensor_origin_world,
+                                             std::uint32_t frame) {
   OctoMapFrameStats stats;
   stats.points = points_world.size();
   if (!tree_ || !sensor_origin_world.allFinite()) {
@@ -65,12 +70,18 @@ OctoMapFrameStats OctoMapFusion::InsertFrame(const std::vector<Eigen::Vector3d>&
                                 static_cast<float>(sensor_origin_world.y()),
                                 static_cast<float>(sensor_origin_world.z()));
   const double max_range = options_.max_range_m > 0.0 ? options_.max_range_m : -1.0;
-  const BatchCounts counts = tree_->InsertDiscretized(points_, origin, max_range);
+  const BatchCounts counts = tree_->InsertDiscretized(points_, origin, max_range, frame);
   stats.dropped_out_of_bounds = counts.dropped_out_of_bounds;
   stats.inserted = points_.size() - counts.dropped_out_of_bounds;
   stats.free_voxels = counts.free_voxels;
   stats.occupied_voxels = counts.occupied_voxels;
   return stats;
+}
+
+std::unique_ptr<BatchOcTree> OctoMapFusion::Moved(const BatchOcTree::FrameCorrection& correction,
+                                                  OcTreeMoveStats* stats) const {
+  if (!tree_) return nullptr;
+  return tree_->MovedCopy(correction, stats);
 }
 
 bool OctoMapFusion::Save(std::ostream& out) const {
@@ -79,6 +90,17 @@ bool OctoMapFusion::Save(std::ostream& out) const {
   if (tree_) {
     const std::string bytes = FullOcTreeBytes(*tree_);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    // The tags, sorted so that a state saves to the same bytes whatever the hash order.
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> tags(tree_->block_frames().begin(),
+                                                              tree_->block_frames().end());
+    std::sort(tags.begin(), tags.end());
+    const std::uint64_t count = tags.size();
+    out.write(kTagsMagic, sizeof(kTagsMagic));
+    out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+    for (const auto& [block, frame] : tags) {
+      out.write(reinterpret_cast<const char*>(&block), sizeof(block));
+      out.write(reinterpret_cast<const char*>(&frame), sizeof(frame));
+    }
   }
   return static_cast<bool>(out);
 }
@@ -105,6 +127,23 @@ void OctoMapFusion::Restore(std::istream& in) {
   restored->setProbMiss(options_.prob_miss);
   // A state saved with stale inner nodes (earlier versions): the walk assumes current ones.
   if (schedule[1] != 0) restored->updateInnerOccupancy();
+  // The blocks' tags; a state saved before they were kept has none.
+  char magic[sizeof(kTagsMagic)] = {};
+  if (in.read(magic, sizeof(magic)) && std::equal(magic, magic + sizeof(magic), kTagsMagic)) {
+    std::uint64_t count = 0;
+    if (!in.read(reinterpret_cast<char*>(&count), sizeof(count)))
+      throw std::runtime_error("OctoMap state: truncated tags");
+    BatchOcTree::BlockFrames tags;
+    for (std::uint64_t i = 0; i < count; ++i) {
+      std::uint64_t block = 0;
+      std::uint32_t frame = 0;
+      if (!in.read(reinterpret_cast<char*>(&block), sizeof(block)) ||
+          !in.read(reinterpret_cast<char*>(&frame), sizeof(frame)))
+        throw std::runtime_error("OctoMap state: truncated tags");
+      tags.emplace(block, frame);
+    }
+    restored->SetBlockFrames(std::move(tags));
+  }
   tree_ = std::move(restored);
 }
 

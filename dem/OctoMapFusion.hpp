@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <iosfwd>
 #include <memory>
 #include <vector>
@@ -37,21 +38,29 @@ class OctoMapFusion {
   const OctoMapOptions& options() const { return options_; }
   bool enabled() const { return tree_ != nullptr; }
 
-  /// Inserts world points seen from `sensor_origin_world` [m]. Never throws.
+  /// Inserts world points seen from `sensor_origin_world` [m], as frame `frame` (the tag its
+  /// blocks of voxels follow when the map is moved: BatchOcTree::MovedCopy). Never throws.
   OctoMapFrameStats InsertFrame(const std::vector<Eigen::Vector3d>& points_world,
-                                const Eigen::Vector3d& sensor_origin_world);
+                                const Eigen::Vector3d& sensor_origin_world,
+                                std::uint32_t frame = 0);
 
   /// The tree, inner nodes up to date; nullptr when disabled. Not thread-safe against
   /// InsertFrame.
-  const octomap::OcTree* tree() const { return tree_.get(); }
+  const BatchOcTree* tree() const { return tree_.get(); }
+  /// The tree moved with its frames' corrections (BatchOcTree::MovedCopy); nullptr when
+  /// disabled. Not thread-safe against InsertFrame.
+  std::unique_ptr<BatchOcTree> Moved(const BatchOcTree::FrameCorrection& correction,
+                                     OcTreeMoveStats* stats = nullptr) const;
 
   /// The whole state for a checkpoint (service/Checkpoint): the tree with its log-odds (OctoMap's
   /// .ot format), after two words that earlier versions used for an inner-update schedule and
-  /// that are now zero. Nothing when disabled.
+  /// that are now zero, followed by the blocks' frame tags (BatchOcTree::block_frames). Nothing
+  /// when disabled.
   /// @return false if the stream failed.
   bool Save(std::ostream& out) const;
   /// Replaces the state by one Save wrote with the same options (or an earlier version, whose
-  /// stale inner nodes are brought up to date here).
+  /// stale inner nodes are brought up to date here; without tags, its voxels stay in place when
+  /// the map is moved).
   /// @throw std::runtime_error if the data are not such a state.
   void Restore(std::istream& in);
 

@@ -53,6 +53,18 @@ struct Share {
 
 }  // namespace
 
+std::vector<std::optional<Eigen::Isometry3d>> GraphCorrections(
+    const std::vector<FrameResult>& results, const GraphOutcome& graph) {
+  std::vector<std::optional<Eigen::Isometry3d>> out;
+  if (!graph.solution.solved) return out;
+  for (const FrameResult& r : results) {
+    if (r.index >= graph.solution.T_world_body.size()) continue;
+    if (out.size() <= r.step.index) out.resize(r.step.index + 1);
+    out[r.step.index] = graph.solution.T_world_body[r.index] * r.step.T_world_body.inverse();
+  }
+  return out;
+}
+
 io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameResult>& results,
                              const GraphOutcome& graph, DemWarpStats* stats) {
   DemWarpStats local;

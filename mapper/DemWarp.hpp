@@ -7,7 +7,9 @@
 // A deformation of the map, as the graph's correction varies slowly along the path; what it
 // cannot do is pull apart two passes that the chain fused into one cell (replay's re-fusion can).
 
+#include <Eigen/Geometry>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,12 @@ struct DemWarpStats {
   /// corrections would spread it over more than 4 times its raster (a graph gone wrong).
   std::string refused;
 };
+
+/// Per chain step index (FrameResult::step.index), the correction that moves the chain's pose
+/// onto `graph`'s, T_graph · T_chain⁻¹ (world frame, on the left); nullopt for the frames the
+/// graph did not solve, and for all when it is not solved. Never throws but std::bad_alloc.
+std::vector<std::optional<Eigen::Isometry3d>> GraphCorrections(
+    const std::vector<FrameResult>& results, const GraphOutcome& graph);
 
 /// `dem` (the chain's, with its frame layer) moved with `graph`'s correction of each cell's
 /// frame among `results`. A cell whose frame has no solved pose keeps the chain's place. An

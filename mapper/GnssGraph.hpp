@@ -29,8 +29,8 @@ struct GraphOutcome {
   std::vector<std::vector<std::size_t>> frame_fixes;
   std::size_t frames_refused = 0;  ///< frames that could not be read again for the re-fusion
   /// How the DEM and the OctoMap follow the solved graph (summary.json `graph.maps`): fused
-  /// again from its poses (replay), the DEM moved with it and the OctoMap the chain's (serve,
-  /// mapper/DemWarp), or both the chain's.
+  /// again from its poses (replay), moved with it (serve: mapper/DemWarp here, and the OctoMap's
+  /// bytes moved on its thread, which the writer reports), or both the chain's.
   enum class Maps { kChain, kFusedAgain, kDemMoved };
   Maps maps = Maps::kChain;
   /// A windowed solve (a daemon's) made whole because a revisit found since the last solve

@@ -500,7 +500,7 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       if (keep[i]) points_world.push_back(T * cloud.points[i]);
     }
-    octomap_.Insert(std::move(points_world), ctx.sensor_origin_world);
+    octomap_.Insert(std::move(points_world), ctx.sensor_origin_world, ctx.frame);
   }
   result->time.fuse_octomap_ms = MsSince(octomap_start);
 }

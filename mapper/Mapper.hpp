@@ -197,8 +197,11 @@ class Mapper {
   const dem::OctoMapFusion& octomap() const { return octomap_.Fusion(); }
   /// The OctoMap's bytes once the frames processed so far are in, made on its thread (no wait
   /// here; see OctoMapWorker::SerialiseWhenQueuedIn).
-  std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapBytes(bool with_ot) const {
-    return octomap_.SerialiseWhenQueuedIn(with_ot);
+  /// With `corrections`, the bytes of the tree moved with them (OctoMapWorker::Corrections,
+  /// per chain step index).
+  std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapBytes(
+      bool with_ot, std::shared_ptr<const OctoMapWorker::Corrections> corrections = nullptr) const {
+    return octomap_.SerialiseWhenQueuedIn(with_ot, std::move(corrections));
   }
   const io::Georeference& georeference() const { return georef_; }
   const io::SequenceInfo& sequence() const { return sequence_; }

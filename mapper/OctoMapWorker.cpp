@@ -25,11 +25,11 @@ OctoMapWorker::~OctoMapWorker() {
 }
 
 void OctoMapWorker::Insert(std::vector<Eigen::Vector3d> points_world,
-                           const Eigen::Vector3d& sensor_origin_world) {
+                           const Eigen::Vector3d& sensor_origin_world, std::uint32_t frame) {
   if (!fusion_.enabled()) return;
   std::unique_lock<std::mutex> lock(mutex_);
   changed_.wait(lock, [this] { return !queued_.has_value(); });
-  queued_ = Job{std::move(points_world), sensor_origin_world, {}};
+  queued_ = Job{std::move(points_world), sensor_origin_world, frame, {}};
   changed_.notify_all();
 }
 
@@ -51,7 +51,7 @@ double OctoMapWorker::last_insert_ms() const {
 }
 
 std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapWorker::SerialiseWhenQueuedIn(
-    bool with_ot) const {
+    bool with_ot, std::shared_ptr<const Corrections> corrections) const {
   std::promise<std::optional<TreeBytes>> promise;
   std::shared_future<std::optional<TreeBytes>> bytes = promise.get_future().share();
   if (!fusion_.enabled()) {
@@ -61,23 +61,36 @@ std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapWorker::Seria
   {
     std::lock_guard<std::mutex> lock(mutex_);
     // After the frame still queued, or as a job of its own after the one being inserted.
-    if (!queued_) queued_ = Job{{}, Eigen::Vector3d::Zero(), {}};
-    queued_->serialise.emplace_back(with_ot, std::move(promise));
+    if (!queued_) queued_ = Job{{}, Eigen::Vector3d::Zero(), 0, {}};
+    queued_->serialise.push_back({with_ot, std::move(corrections), std::move(promise)});
   }
   changed_.notify_all();
   return bytes;
 }
 
-void OctoMapWorker::Serialise(
-    std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>>* requests) const {
-  for (auto& [with_ot, promise] : *requests) {
+void OctoMapWorker::Serialise(std::vector<Job::Request>* requests) const {
+  for (Job::Request& request : *requests) {
     try {
       TreeBytes bytes;
-      bytes.bt = dem::BinaryOcTreeBytes(*fusion_.tree());
-      if (with_ot) bytes.ot = dem::FullOcTreeBytes(*fusion_.tree());
-      promise.set_value(std::move(bytes));
+      std::unique_ptr<dem::BatchOcTree> moved;
+      if (request.corrections) {
+        const auto start = std::chrono::steady_clock::now();
+        const Corrections& c = *request.corrections;
+        dem::OcTreeMoveStats stats;
+        moved = fusion_.Moved(
+            [&c](std::uint32_t frame) -> const Eigen::Isometry3d* {
+              return frame < c.size() && c[frame] ? &*c[frame] : nullptr;
+            },
+            &stats);
+        bytes.moved = stats;
+        bytes.move_ms = core::MsSince(start);
+      }
+      const octomap::OcTree& tree = moved ? *moved : *fusion_.tree();
+      bytes.bt = dem::BinaryOcTreeBytes(tree);
+      if (request.with_ot) bytes.ot = dem::FullOcTreeBytes(tree);
+      request.promise.set_value(std::move(bytes));
     } catch (...) {  // std::bad_alloc: the writer's get() rethrows it
-      promise.set_exception(std::current_exception());
+      request.promise.set_exception(std::current_exception());
     }
   }
 }
@@ -88,7 +101,8 @@ namespace {
 // many small allocations and the frames' buffers leave it fragmented, and the resident memory
 // grew with it. Handing it back every 25 insertions keeps a long loop's resident memory flat
 // after the first lap at no per-frame cost (docs/benchmarks.md, "Serve"); after every insertion
-// the DEM fusion paid for the pages faulted back in (docs/benchmarks.md, "Figures behind the frame pipeline's code").
+// the DEM fusion paid for the pages faulted back in (docs/benchmarks.md, "Figures behind the frame
+// pipeline's code").
 constexpr long kTrimEveryInsertions = 25;
 
 void ReturnFreedMemory() {
@@ -113,7 +127,7 @@ void OctoMapWorker::Loop() {
     }
     changed_.notify_all();  // a producer may queue the next frame meanwhile
     const auto start = std::chrono::steady_clock::now();
-    if (!job.points.empty()) fusion_.InsertFrame(job.points, job.origin);
+    if (!job.points.empty()) fusion_.InsertFrame(job.points, job.origin, job.frame);
     const double ms = core::MsSince(start);
     Serialise(&job.serialise);
     {

@@ -3,9 +3,11 @@
 // is independent of the next frame's registration, so the two overlap; one frame at most waits,
 // so memory stays flat, and frames go in order, so the tree equals a serial one.
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <condition_variable>
+#include <cstdint>
 #include <future>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -27,8 +29,8 @@ class OctoMapWorker {
 
   /// Queues one frame's world points seen from `sensor_origin_world`; waits first while an
   /// earlier frame is still queued (not while it is being inserted). Never throws.
-  void Insert(std::vector<Eigen::Vector3d> points_world,
-              const Eigen::Vector3d& sensor_origin_world);
+  void Insert(std::vector<Eigen::Vector3d> points_world, const Eigen::Vector3d& sensor_origin_world,
+              std::uint32_t frame);
 
   /// Waits until every queued frame is in the tree, then gives the map (for writing).
   const dem::OctoMapFusion& Fusion() const;
@@ -45,20 +47,34 @@ class OctoMapWorker {
   struct TreeBytes {
     std::string bt;
     std::string ot;  ///< empty unless asked for
+    /// Set when the tree was moved before it was serialised (`corrections` given).
+    std::optional<dem::OcTreeMoveStats> moved;
+    double move_ms = 0.0;  ///< what moving it took [ms]
   };
-  /// Never throws; the future holds nullopt when the OctoMap is off.
-  std::shared_future<std::optional<TreeBytes>> SerialiseWhenQueuedIn(bool with_ot) const;
+  /// Per frame (the index InsertFrame was given), the rigid correction to move its voxels by
+  /// (world frame, on the left; nullopt: they stay).
+  using Corrections = std::vector<std::optional<Eigen::Isometry3d>>;
+  /// With `corrections`, the bytes are those of the tree moved with them (dem::BatchOcTree::
+  /// MovedCopy; the fused tree is left as it is). Never throws; the future holds nullopt when
+  /// the OctoMap is off.
+  std::shared_future<std::optional<TreeBytes>> SerialiseWhenQueuedIn(
+      bool with_ot, std::shared_ptr<const Corrections> corrections = nullptr) const;
 
  private:
   void Loop();
   struct Job {
     std::vector<Eigen::Vector3d> points;  // none: a serialisation only
     Eigen::Vector3d origin;
+    std::uint32_t frame = 0;
     // Serialisations asked for once this job's points are in.
-    std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>> serialise;
+    struct Request {
+      bool with_ot = false;
+      std::shared_ptr<const Corrections> corrections;
+      std::promise<std::optional<TreeBytes>> promise;
+    };
+    std::vector<Request> serialise;
   };
-  void Serialise(
-      std::vector<std::pair<bool, std::promise<std::optional<TreeBytes>>>>* requests) const;
+  void Serialise(std::vector<Job::Request>* requests) const;
   dem::OctoMapFusion fusion_;
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;

@@ -489,9 +489,10 @@ std::optional<GraphOutcome> Daemon::SolveAndLogGraph() {
 void Daemon::Publish(bool write) {
   if (mapper_->results().empty()) return;
   // The pose graph over every frame so far, with what its sources found (docs/graph.md): the
-  // published trajectory is its own, and so is the DEM's place (moved with it, not fused again:
-  // mapper/DemWarp); the OctoMap stays the chain's. No frame since the last solve (a dry queue
-  // right after one that was not written): that solve's outcome, not a second one.
+  // published trajectory is its own, and so are the DEM's and the OctoMap's places (moved with
+  // it, not fused again: mapper/DemWarp, dem::BatchOcTree::MovedCopy). No frame since the last
+  // solve (a dry queue right after one that was not written): that solve's outcome, not a second
+  // one.
   std::optional<GraphOutcome> graph =
       since_publish_ == 0 && unwritten_graph_ ? std::move(unwritten_graph_) : SolveAndLogGraph();
   since_publish_ = 0;
@@ -510,11 +511,7 @@ void Daemon::Publish(bool write) {
                         {"rejected_frames", state_.rejected},
                         {"next_frame", state_.next_index},
                         {"restart_ms", restart_ms_}};
-  OutputState state(*mapper_);
-  state.graph = std::move(graph);
-  if (state.graph && state.graph->solution.solved) {
-    state.move_dem_with_graph = true;  // on the publisher's thread (mapper/DemWarp)
-  }
+  OutputState state(*mapper_, std::move(graph), /*move_maps=*/true);
   // The state is taken here, between frames; the files are written beside the next frames.
   publisher_.Publish(setup_.out, std::move(state), std::move(run), setup_.eval,
                      [this](const std::string& file) { Fault("publish:" + file); });

@@ -22,7 +22,12 @@ namespace rovermap::mapper {
 struct OutputState {
   /// Does not wait for the OctoMap's thread (Mapper::OctoMapBytes).
   /// @throw io::IoError if the DEM's raster would be too large (io::RasteriseDem).
-  explicit OutputState(const Mapper& mapper);
+  explicit OutputState(const Mapper& mapper) : OutputState(mapper, std::nullopt, false) {}
+  /// With `graph` (kept as `graph`). With `move_maps` and a solved graph, the maps follow it
+  /// without being fused again (serve): the DEM is moved by the writer (move_dem_with_graph)
+  /// and the OctoMap's bytes are its tree moved with each frame's correction, on its thread
+  /// (OctoMapWorker::SerialiseWhenQueuedIn, dem::BatchOcTree::MovedCopy).
+  OutputState(const Mapper& mapper, std::optional<GraphOutcome> graph, bool move_maps);
 
   std::vector<FrameResult> results;
   io::Georeference georeference;

@@ -161,6 +161,17 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
                                        {"ms", state.dem_moved->ms},
                                        {"refused", state.dem_moved->refused}};
     }
+    if (tree && tree->moved) {
+      const dem::OcTreeMoveStats& m = *tree->moved;
+      summary["graph"]["maps"] = "dem and octomap moved";
+      summary["graph"]["octomap_moved"] = {{"leaves_in", m.leaves_in},
+                                           {"leaves_moved", m.leaves_moved},
+                                           {"leaves_out", m.leaves_out},
+                                           {"dropped", m.dropped},
+                                           {"median_shift_m", m.median_shift_m},
+                                           {"max_shift_m", m.max_shift_m},
+                                           {"ms", tree->move_ms}};
+    }
     if (optimised && drift && chained_drift) {
       summary["metrics"]["frame_to_frame"] = eval::ToJson(chained_drift->registered);
     }

@@ -38,7 +38,8 @@ std::unique_ptr<mapper::Mapper> MapperAfter(std::size_t frames) {
   const config::Config c;
   io::SequenceReader reader(kTinyCloud);
   auto m = std::make_unique<mapper::Mapper>(
-      reader.info(), mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
+      reader.info(),
+      mapper::PipelineOptions{c.mapper, c.registration, c.stereo, c.dem, c.octomap, c.terrain});
   io::Frame frame;
   for (std::size_t k = 0; k < frames && reader.Next(&frame); ++k) m->ProcessFrame(frame);
   return m;
@@ -119,7 +120,7 @@ TEST(OctoMapWorker, SerialisesTheTreeAsItWasWhenAsked) {
   std::vector<std::shared_future<std::optional<mapper::OctoMapWorker::TreeBytes>>> asked;
   std::vector<std::string> expected;
   for (int k = 0; k < 6; ++k) {
-    worker.Insert(frame(k), origin);
+    worker.Insert(frame(k), origin, static_cast<std::uint32_t>(k));
     serial.InsertFrame(frame(k), origin);
     if (k % 2 == 1 || k == 4) {
       asked.push_back(worker.SerialiseWhenQueuedIn(/*with_ot=*/k == 3));
