@@ -1,13 +1,14 @@
 // Benchmarks of the map products: DEM fusion throughput (points/s, one core), OctoMap insertion per
-// stereo-sized frame at 0.1 and 0.05 m, GeoTIFF write of a 2000×2000 map, and memory and per-frame
-// cost over a long synthetic traverse, and the terrain layers (terrain/) per megacell against
-// plain per-cell loops.
+// stereo-sized frame at 0.1 and 0.05 m, the OctoMap moved onto a pose graph, GeoTIFF write of a
+// 2000×2000 map, and memory and per-frame cost over a long synthetic traverse, and the terrain
+// layers (terrain/) per megacell against plain per-cell loops.
 //   build/bench/bench_maps [--benchmark_filter=...]
 
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -210,6 +211,44 @@ BENCHMARK(BM_OcTreeBytes)
     ->Args({1, 1})
     ->ArgNames({"ours", "bt"})
     ->Unit(benchmark::kMillisecond);
+
+// The same 12-frame tree moved onto a pose graph's poses, as serve publishes it
+// (dem::BatchOcTree::MovedCopy): each frame's voxels turned 0.1° × k and shifted 3.7 cm × k.
+// Arg 0: the voxels read and moved (MoveVoxels, on the OctoMap's thread); Arg 1: the tree built
+// from them (Build, on the publication's writer; the copy of the voxels it takes is not timed).
+void BM_OcTreeMove(benchmark::State& state) {
+  dem::OctoMapFusion fusion;
+  for (int k = 0; k < 12; ++k)
+    fusion.InsertFrame(StereoFrame(0.3 * k, 300000, 10 + k), {0.3 * k, 0.0, 1.5},
+                       static_cast<std::uint32_t>(k));
+  std::vector<Eigen::Isometry3d> corrections;
+  for (int k = 0; k < 12; ++k) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(0.1 * M_PI / 180.0 * k, Eigen::Vector3d::UnitZ()).matrix();
+    T.translation() = Eigen::Vector3d(0.037 * k, -0.021 * k, 0.005 * k);
+    corrections.push_back(T);
+  }
+  const dem::BatchOcTree::FrameCorrection correction =
+      [&corrections](std::uint32_t frame) -> const Eigen::Isometry3d* {
+    return frame < corrections.size() ? &corrections[frame] : nullptr;
+  };
+  const dem::BatchOcTree& tree = *fusion.tree();
+  const dem::MovedVoxels moved = tree.MoveVoxels(correction);
+  std::size_t leaves = 0;
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      leaves = tree.MoveVoxels(correction).leaves.size();
+    } else {
+      state.PauseTiming();
+      dem::MovedVoxels copy = moved;
+      state.ResumeTiming();
+      leaves = dem::BatchOcTree::Build(std::move(copy))->getNumLeafNodes();
+    }
+    benchmark::DoNotOptimize(leaves);
+  }
+  state.counters["voxels"] = static_cast<double>(moved.leaves.size());
+}
+BENCHMARK(BM_OcTreeMove)->Arg(0)->Arg(1)->ArgName("build")->Unit(benchmark::kMillisecond);
 
 // The publication test of every cell of a 2000×2000-cell map (dem.tif, dem.png and the counts
 // each make this pass): min_support and 4 agreeing neighbours of 8.

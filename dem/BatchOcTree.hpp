@@ -37,6 +37,18 @@ struct OcTreeMoveStats {
   double max_shift_m = 0.0;      ///< largest [m]
 };
 
+/// A tree's voxels moved (BatchOcTree::MoveVoxels) but not yet a tree (BatchOcTree::Build): the
+/// part that reads the tree, on the thread that owns it, and the part that does not, which can
+/// go on beside the next insertions.
+struct MovedVoxels {
+  double resolution = 0.1;  // [m]
+  double prob_hit = 0.7, prob_miss = 0.4;
+  double clamping_min = 0.1192, clamping_max = 0.971, occupancy = 0.5;  // probabilities
+  std::vector<std::pair<std::uint64_t, float>> leaves;  ///< Morton code, log-odds; any order
+  std::vector<float> shifts;                            ///< per moved block [m]
+  OcTreeMoveStats stats;                                ///< leaves_in, leaves_moved, dropped so far
+};
+
 class BatchOcTree : public octomap::OcTree {
  public:
   /// @param resolution [m] leaf edge.
@@ -79,6 +91,9 @@ class BatchOcTree : public octomap::OcTree {
   /// none. Never throws but std::bad_alloc.
   std::unique_ptr<BatchOcTree> MovedCopy(const FrameCorrection& correction,
                                          OcTreeMoveStats* stats = nullptr) const;
+  /// MovedCopy in two steps: the voxels read and moved, then the tree built from them.
+  MovedVoxels MoveVoxels(const FrameCorrection& correction) const;
+  static std::unique_ptr<BatchOcTree> Build(MovedVoxels voxels, OcTreeMoveStats* stats = nullptr);
 
  private:
   void CastRay(const octomap::point3d& origin, const octomap::point3d& end);

@@ -18,24 +18,42 @@ using namespace morton;  // NOLINT: the key arithmetic of BatchOcTree.cpp
 // tree never prunes, and a restored one prunes free space near the sensor at most.
 constexpr unsigned kShallowestExpanded = 10;
 
+// Ascending LSD radix sort by the 48-bit code, four 12-bit digits (a comparison sort of KITTI's
+// 5.5 M voxels took about a third of the move).
+void SortByCode(std::vector<std::pair<std::uint64_t, float>>* v) {
+  constexpr unsigned kBits = 12, kBuckets = 1U << kBits;
+  std::vector<std::pair<std::uint64_t, float>> scratch(v->size());
+  std::vector<std::size_t> start(kBuckets);
+  for (unsigned shift = 0; shift < 48; shift += kBits) {
+    std::fill(start.begin(), start.end(), 0);
+    for (const auto& x : *v) ++start[(x.first >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& s : start) sum += std::exchange(s, sum);
+    for (const auto& x : *v) scratch[start[(x.first >> shift) & (kBuckets - 1)]++] = x;
+    v->swap(scratch);
+  }
+}
+
 }  // namespace
 
 std::unique_ptr<BatchOcTree> BatchOcTree::MovedCopy(const FrameCorrection& correction,
                                                     OcTreeMoveStats* stats) const {
-  OcTreeMoveStats local;
-  OcTreeMoveStats& st = stats != nullptr ? *stats : local;
-  st = {};
-  auto moved = std::make_unique<BatchOcTree>(resolution);
-  moved->setProbHit(getProbHit());
-  moved->setProbMiss(getProbMiss());
-  moved->setClampingThresMin(getClampingThresMin());
-  moved->setClampingThresMax(getClampingThresMax());
-  moved->setOccupancyThres(getOccupancyThres());
-  if (root == nullptr) return moved;
+  return Build(MoveVoxels(correction), stats);
+}
 
-  std::vector<std::pair<std::uint64_t, float>> leaves;
+MovedVoxels BatchOcTree::MoveVoxels(const FrameCorrection& correction) const {
+  MovedVoxels out;
+  out.resolution = resolution;
+  out.prob_hit = getProbHit();
+  out.prob_miss = getProbMiss();
+  out.clamping_min = getClampingThresMin();
+  out.clamping_max = getClampingThresMax();
+  out.occupancy = getOccupancyThres();
+  if (root == nullptr) return out;
+  OcTreeMoveStats& st = out.stats;
+  std::vector<std::pair<std::uint64_t, float>>& leaves = out.leaves;
   leaves.reserve(getNumLeafNodes());
-  std::vector<float> shifts;  // per moved block [m]
+  std::vector<float>& shifts = out.shifts;
   // The block being read and its correction: a block's voxels come together (Morton order).
   std::uint64_t block = std::numeric_limits<std::uint64_t>::max();
   const Eigen::Isometry3d* T = nullptr;
@@ -102,8 +120,19 @@ std::unique_ptr<BatchOcTree> BatchOcTree::MovedCopy(const FrameCorrection& corre
     --depth;
   }
 
-  std::sort(leaves.begin(), leaves.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+std::unique_ptr<BatchOcTree> BatchOcTree::Build(MovedVoxels voxels, OcTreeMoveStats* stats) {
+  auto moved = std::make_unique<BatchOcTree>(voxels.resolution);
+  moved->setProbHit(voxels.prob_hit);
+  moved->setProbMiss(voxels.prob_miss);
+  moved->setClampingThresMin(voxels.clamping_min);
+  moved->setClampingThresMax(voxels.clamping_max);
+  moved->setOccupancyThres(voxels.occupancy);
+  OcTreeMoveStats& st = voxels.stats;
+  std::vector<std::pair<std::uint64_t, float>>& leaves = voxels.leaves;
+  SortByCode(&leaves);
   // Two voxels in one: the higher log-odds (occupied over free).
   std::size_t out = 0;
   for (std::size_t i = 0; i < leaves.size(); ++i) {
@@ -115,6 +144,7 @@ std::unique_ptr<BatchOcTree> BatchOcTree::MovedCopy(const FrameCorrection& corre
   }
   leaves.resize(out);
   st.leaves_out = leaves.size();
+  std::vector<float>& shifts = voxels.shifts;
   if (!shifts.empty()) {
     const auto mid = shifts.begin() + static_cast<long>(shifts.size() / 2);
     std::nth_element(shifts.begin(), mid, shifts.end());
@@ -122,6 +152,7 @@ std::unique_ptr<BatchOcTree> BatchOcTree::MovedCopy(const FrameCorrection& corre
     st.max_shift_m = *std::max_element(shifts.begin(), shifts.end());
   }
   moved->SetLeaves(leaves);
+  if (stats != nullptr) *stats = st;
   return moved;
 }
 

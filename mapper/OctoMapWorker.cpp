@@ -58,11 +58,29 @@ std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapWorker::Seria
     promise.set_value(std::nullopt);
     return bytes;
   }
+  std::promise<std::pair<std::shared_ptr<dem::MovedVoxels>, double>> moved;
+  if (corrections) {
+    bytes = std::async(std::launch::deferred, [voxels = moved.get_future(), with_ot]() mutable {
+              auto [moved_voxels, read_ms] = voxels.get();
+              const auto start = std::chrono::steady_clock::now();
+              TreeBytes out;
+              dem::OcTreeMoveStats stats;
+              const std::unique_ptr<dem::BatchOcTree> tree =
+                  dem::BatchOcTree::Build(std::move(*moved_voxels), &stats);
+              moved_voxels.reset();
+              out.moved = stats;
+              out.move_ms = read_ms + core::MsSince(start);
+              out.bt = dem::BinaryOcTreeBytes(*tree);
+              if (with_ot) out.ot = dem::FullOcTreeBytes(*tree);
+              return std::optional<TreeBytes>(std::move(out));
+            }).share();
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     // After the frame still queued, or as a job of its own after the one being inserted.
     if (!queued_) queued_ = Job{{}, Eigen::Vector3d::Zero(), 0, {}};
-    queued_->serialise.push_back({with_ot, std::move(corrections), std::move(promise)});
+    queued_->serialise.push_back(
+        {with_ot, std::move(corrections), std::move(promise), std::move(moved)});
   }
   changed_.notify_all();
   return bytes;
@@ -71,26 +89,26 @@ std::shared_future<std::optional<OctoMapWorker::TreeBytes>> OctoMapWorker::Seria
 void OctoMapWorker::Serialise(std::vector<Job::Request>* requests) const {
   for (Job::Request& request : *requests) {
     try {
-      TreeBytes bytes;
-      std::unique_ptr<dem::BatchOcTree> moved;
       if (request.corrections) {
         const auto start = std::chrono::steady_clock::now();
         const Corrections& c = *request.corrections;
-        dem::OcTreeMoveStats stats;
-        moved = fusion_.Moved(
-            [&c](std::uint32_t frame) -> const Eigen::Isometry3d* {
+        auto voxels = std::make_shared<dem::MovedVoxels>(
+            fusion_.tree()->MoveVoxels([&c](std::uint32_t frame) -> const Eigen::Isometry3d* {
               return frame < c.size() && c[frame] ? &*c[frame] : nullptr;
-            },
-            &stats);
-        bytes.moved = stats;
-        bytes.move_ms = core::MsSince(start);
+            }));
+        request.moved.set_value({std::move(voxels), core::MsSince(start)});
+        continue;
       }
-      const octomap::OcTree& tree = moved ? *moved : *fusion_.tree();
-      bytes.bt = dem::BinaryOcTreeBytes(tree);
-      if (request.with_ot) bytes.ot = dem::FullOcTreeBytes(tree);
+      TreeBytes bytes;
+      bytes.bt = dem::BinaryOcTreeBytes(*fusion_.tree());
+      if (request.with_ot) bytes.ot = dem::FullOcTreeBytes(*fusion_.tree());
       request.promise.set_value(std::move(bytes));
     } catch (...) {  // std::bad_alloc: the writer's get() rethrows it
-      request.promise.set_exception(std::current_exception());
+      if (request.corrections) {
+        request.moved.set_exception(std::current_exception());
+      } else {
+        request.promise.set_exception(std::current_exception());
+      }
     }
   }
 }

@@ -55,8 +55,10 @@ class OctoMapWorker {
   /// (world frame, on the left; nullopt: they stay).
   using Corrections = std::vector<std::optional<Eigen::Isometry3d>>;
   /// With `corrections`, the bytes are those of the tree moved with them (dem::BatchOcTree::
-  /// MovedCopy; the fused tree is left as it is). Never throws; the future holds nullopt when
-  /// the OctoMap is off.
+  /// MovedCopy; the fused tree is left as it is): its voxels are read and moved on the worker's
+  /// thread, the moved tree is built and serialised by the first get() of the future, on its
+  /// caller's thread (a publication's writer), so the insertions go on meanwhile. Never throws;
+  /// the future holds nullopt when the OctoMap is off.
   std::shared_future<std::optional<TreeBytes>> SerialiseWhenQueuedIn(
       bool with_ot, std::shared_ptr<const Corrections> corrections = nullptr) const;
 
@@ -70,7 +72,10 @@ class OctoMapWorker {
     struct Request {
       bool with_ot = false;
       std::shared_ptr<const Corrections> corrections;
-      std::promise<std::optional<TreeBytes>> promise;
+      std::promise<std::optional<TreeBytes>> promise;  // without corrections
+      // With corrections: the voxels moved on this thread (the tree is built where the bytes
+      // are taken) and the time that took [ms].
+      std::promise<std::pair<std::shared_ptr<dem::MovedVoxels>, double>> moved;
     };
     std::vector<Request> serialise;
   };

@@ -25,7 +25,7 @@ struct OutputState {
   explicit OutputState(const Mapper& mapper) : OutputState(mapper, std::nullopt, false) {}
   /// With `graph` (kept as `graph`). With `move_maps` and a solved graph, the maps follow it
   /// without being fused again (serve): the DEM is moved by the writer (move_dem_with_graph)
-  /// and the OctoMap's bytes are its tree moved with each frame's correction, on its thread
+  /// and the OctoMap's bytes are its tree moved with each frame's correction
   /// (OctoMapWorker::SerialiseWhenQueuedIn, dem::BatchOcTree::MovedCopy).
   OutputState(const Mapper& mapper, std::optional<GraphOutcome> graph, bool move_maps);
 
