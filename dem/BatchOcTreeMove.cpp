@@ -49,7 +49,7 @@ MovedVoxels BatchOcTree::MoveVoxels(const FrameCorrection& correction) const {
   out.clamping_min = getClampingThresMin();
   out.clamping_max = getClampingThresMax();
   out.occupancy = getOccupancyThres();
-  if (root == nullptr) return out;
+  if (root == nullptr || !nodeHasChildren(root)) return out;  // empty (never a pruned root)
   OcTreeMoveStats& st = out.stats;
   std::vector<std::pair<std::uint64_t, float>>& leaves = out.leaves;
   leaves.reserve(getNumLeafNodes());
@@ -68,7 +68,9 @@ MovedVoxels BatchOcTree::MoveVoxels(const FrameCorrection& correction) const {
       const auto tag = block_frames_.find(block);
       T = tag == block_frames_.end() ? nullptr : correction(tag->second & ~kOccupiedTag);
       if (T != nullptr) {
-        const Eigen::Vector3d c = centre(block << (3 * kBlockLevels));
+        // The block's centre: its first voxel's, 3.5 voxels in on each axis.
+        const Eigen::Vector3d c =
+            centre(block << (3 * kBlockLevels)) + Eigen::Vector3d::Constant(3.5 * resolution);
         shifts.push_back(static_cast<float>(((*T) * c - c).head<2>().norm()));
       }
     }
