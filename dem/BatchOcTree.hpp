@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -41,9 +42,9 @@ struct OcTreeMoveStats {
 /// part that reads the tree, on the thread that owns it, and the part that does not, which can
 /// go on beside the next insertions.
 struct MovedVoxels {
-  double resolution = 0.1;  // [m]
-  double prob_hit = 0.7, prob_miss = 0.4;
-  double clamping_min = 0.1192, clamping_max = 0.971, occupancy = 0.5;  // probabilities
+  // The source tree's resolution [m] and sensor model (probabilities), for the copy.
+  double resolution = 0.0;
+  double prob_hit = 0.0, prob_miss = 0.0, clamping_min = 0.0, clamping_max = 0.0, occupancy = 0.0;
   std::vector<std::pair<std::uint64_t, float>> leaves;  ///< Morton code, log-odds; any order
   std::vector<float> shifts;                            ///< per moved block [m]
   OcTreeMoveStats stats;                                ///< leaves_in, leaves_moved, dropped so far
@@ -83,6 +84,10 @@ class BatchOcTree : public octomap::OcTree {
   /// The rigid correction of a frame's content (world frame, applied on the left), or nullptr
   /// where it stays.
   using FrameCorrection = std::function<const Eigen::Isometry3d*(std::uint32_t frame)>;
+  /// The correction of frame f is `corrections[f]` (none past its end or where nullopt); the
+  /// vector must outlive the function.
+  static FrameCorrection CorrectionsByFrame(
+      const std::vector<std::optional<Eigen::Isometry3d>>& corrections);
   /// A copy of the tree whose every voxel has moved with the correction of its block's frame:
   /// its centre is transformed and it lands in the voxel that holds the moved centre (nearest
   /// voxel; where two land in one, the higher log-odds wins, as an endpoint wins over free space

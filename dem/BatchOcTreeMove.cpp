@@ -36,6 +36,13 @@ void SortByCode(std::vector<std::pair<std::uint64_t, float>>* v) {
 
 }  // namespace
 
+BatchOcTree::FrameCorrection BatchOcTree::CorrectionsByFrame(
+    const std::vector<std::optional<Eigen::Isometry3d>>& corrections) {
+  return [&corrections](std::uint32_t frame) -> const Eigen::Isometry3d* {
+    return frame < corrections.size() && corrections[frame] ? &*corrections[frame] : nullptr;
+  };
+}
+
 std::unique_ptr<BatchOcTree> BatchOcTree::MovedCopy(const FrameCorrection& correction,
                                                     OcTreeMoveStats* stats) const {
   return Build(MoveVoxels(correction), stats);

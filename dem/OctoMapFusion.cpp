@@ -78,12 +78,6 @@ OctoMapFrameStats OctoMapFusion::InsertFrame(const std::vector<Eigen::Vector3d>&
   return stats;
 }
 
-std::unique_ptr<BatchOcTree> OctoMapFusion::Moved(const BatchOcTree::FrameCorrection& correction,
-                                                  OcTreeMoveStats* stats) const {
-  if (!tree_) return nullptr;
-  return tree_->MovedCopy(correction, stats);
-}
-
 bool OctoMapFusion::Save(std::ostream& out) const {
   const std::int32_t schedule[2] = {0, 0};  // inner nodes current: nothing scheduled
   out.write(reinterpret_cast<const char*>(schedule), sizeof(schedule));

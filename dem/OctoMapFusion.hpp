@@ -47,10 +47,6 @@ class OctoMapFusion {
   /// The tree, inner nodes up to date; nullptr when disabled. Not thread-safe against
   /// InsertFrame.
   const BatchOcTree* tree() const { return tree_.get(); }
-  /// The tree moved with its frames' corrections (BatchOcTree::MovedCopy); nullptr when
-  /// disabled. Not thread-safe against InsertFrame.
-  std::unique_ptr<BatchOcTree> Moved(const BatchOcTree::FrameCorrection& correction,
-                                     OcTreeMoveStats* stats = nullptr) const;
 
   /// The whole state for a checkpoint (service/Checkpoint): the tree with its log-odds (OctoMap's
   /// .ot format), after two words that earlier versions used for an inner-update schedule and

@@ -77,12 +77,14 @@ io::DemLayers WarpDemToGraph(const io::DemLayers& dem, const std::vector<FrameRe
     st.cells_in = st.cells_out = dem.valid_cells;
     return dem;
   }
+  const std::vector<std::optional<Eigen::Isometry3d>> corrections =
+      GraphCorrections(results, graph);
   std::unordered_map<std::uint32_t, FrameMove> moves;
   for (const FrameResult& r : results) {
     FrameMove m;
     const ChainStep reported = ReportedStep(r, &graph);
-    m.solved = r.index < graph.solution.T_world_body.size();
-    m.correction = reported.T_world_body * r.step.T_world_body.inverse();
+    m.solved = r.step.index < corrections.size() && corrections[r.step.index].has_value();
+    if (m.solved) m.correction = *corrections[r.step.index];
     m.body_chain = r.step.T_world_body.translation();
     m.share_chain = VerticalShareForm(r.step.T_world_body, r.step.covariance);
     m.share_graph = VerticalShareForm(reported.T_world_body, reported.covariance);

@@ -31,7 +31,7 @@ struct GraphOutcome {
   /// How the DEM and the OctoMap follow the solved graph (summary.json `graph.maps`): fused
   /// again from its poses (replay), moved with it (serve: mapper/DemWarp here, and the OctoMap's
   /// bytes moved on its thread, which the writer reports), or both the chain's.
-  enum class Maps { kChain, kFusedAgain, kDemMoved };
+  enum class Maps { kChain, kFusedAgain, kDemMoved, kMapsMoved };
   Maps maps = Maps::kChain;
   /// A windowed solve (a daemon's) made whole because a revisit found since the last solve
   /// reaches this frame, before the window: the earlier frame of that loop.

@@ -91,11 +91,8 @@ void OctoMapWorker::Serialise(std::vector<Job::Request>* requests) const {
     try {
       if (request.corrections) {
         const auto start = std::chrono::steady_clock::now();
-        const Corrections& c = *request.corrections;
         auto voxels = std::make_shared<dem::MovedVoxels>(
-            fusion_.tree()->MoveVoxels([&c](std::uint32_t frame) -> const Eigen::Isometry3d* {
-              return frame < c.size() && c[frame] ? &*c[frame] : nullptr;
-            }));
+            fusion_.tree()->MoveVoxels(dem::BatchOcTree::CorrectionsByFrame(*request.corrections)));
         request.moved.set_value({std::move(voxels), core::MsSince(start)});
         continue;
       }

@@ -304,9 +304,10 @@ nlohmann::json GraphJson(const GraphOutcome& graph) {
           {"iterations", s.iterations},
           {"solve_ms", s.solve_ms},
           {"frames_not_refused", graph.frames_refused},
-          {"maps", graph.maps == GraphOutcome::Maps::kFusedAgain ? "fused again"
-                   : graph.maps == GraphOutcome::Maps::kDemMoved ? "dem moved"
-                                                                 : "chain"},
+          {"maps", graph.maps == GraphOutcome::Maps::kFusedAgain  ? "fused again"
+                   : graph.maps == GraphOutcome::Maps::kDemMoved  ? "dem moved"
+                   : graph.maps == GraphOutcome::Maps::kMapsMoved ? "dem and octomap moved"
+                                                                  : "chain"},
           {"message", s.message}};
 }
 

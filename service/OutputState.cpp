@@ -16,6 +16,7 @@ OutputState::OutputState(const Mapper& mapper, std::optional<GraphOutcome> graph
   std::shared_ptr<const OctoMapWorker::Corrections> corrections;
   if (move_maps && graph && graph->solution.solved) {
     move_dem_with_graph = true;  // on the publisher's thread (mapper/DemWarp)
+    octomap_moved_with_graph = mapper.options().octomap.enabled;
     corrections =
         std::make_shared<const OctoMapWorker::Corrections>(GraphCorrections(results, *graph));
   }

@@ -50,6 +50,8 @@ struct OutputState {
   /// With a solved graph, write the DEM (and terrain.tif) moved onto its poses
   /// (mapper/DemWarp) rather than as fused: serve, which does not fuse its frames again.
   bool move_dem_with_graph = false;
+  /// The OctoMap's bytes are its tree moved onto the graph (`octomap` asked with corrections).
+  bool octomap_moved_with_graph = false;
   /// Set by WriteOutputs on the state it wrote when it moved the DEM (summary.json graph.maps).
   std::optional<DemWarpStats> dem_moved;
 };

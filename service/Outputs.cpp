@@ -68,7 +68,8 @@ void MoveDemWithGraph(OutputState* state) {
   stats.ms = core::MsSince(start);
   state->move_dem_with_graph = false;
   state->dem_moved = stats;
-  state->graph->maps = GraphOutcome::Maps::kDemMoved;
+  state->graph->maps = state->octomap_moved_with_graph ? GraphOutcome::Maps::kMapsMoved
+                                                       : GraphOutcome::Maps::kDemMoved;
 }
 
 nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const Mapper& mapper, RunInfo run,
@@ -163,7 +164,6 @@ nlohmann::json WriteOutputs(const std::filesystem::path& out_dir, const OutputSt
     }
     if (tree && tree->moved) {
       const dem::OcTreeMoveStats& m = *tree->moved;
-      summary["graph"]["maps"] = "dem and octomap moved";
       summary["graph"]["octomap_moved"] = {{"leaves_in", m.leaves_in},
                                            {"leaves_moved", m.leaves_moved},
                                            {"leaves_out", m.leaves_out},

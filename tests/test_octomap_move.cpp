@@ -33,9 +33,7 @@ std::vector<Eigen::Vector3d> Patch(double x0, double y0, int seed) {
 }
 
 dem::BatchOcTree::FrameCorrection From(const Corrections& c) {
-  return [&c](std::uint32_t frame) -> const Eigen::Isometry3d* {
-    return frame < c.size() && c[frame] ? &*c[frame] : nullptr;
-  };
+  return dem::BatchOcTree::CorrectionsByFrame(c);
 }
 
 // Every leaf's key and log-odds.
@@ -67,12 +65,12 @@ TEST(OctoMapMove, NoCorrectionGivesTheSameTree) {
   const dem::OctoMapFusion fusion = ThreeFrames();
   const octomap::OcTree& tree = *fusion.tree();
   dem::OcTreeMoveStats stats;
-  const auto none = fusion.Moved(From({}), &stats);
+  const auto none = fusion.tree()->MovedCopy(From({}), &stats);
   EXPECT_EQ(stats.leaves_moved, 0u);
   EXPECT_EQ(stats.leaves_in, tree.getNumLeafNodes());
   EXPECT_EQ(dem::FullOcTreeBytes(*none), dem::FullOcTreeBytes(tree));
   const Corrections identity(3, Eigen::Isometry3d::Identity());
-  const auto same = fusion.Moved(From(identity), &stats);
+  const auto same = fusion.tree()->MovedCopy(From(identity), &stats);
   EXPECT_EQ(stats.leaves_moved, stats.leaves_in);
   EXPECT_EQ(stats.leaves_out, stats.leaves_in);
   EXPECT_EQ(stats.max_shift_m, 0.0);
@@ -88,7 +86,7 @@ TEST(OctoMapMove, AWholeVoxelShiftMovesEveryVoxelExactly) {
   shift.translation() = Eigen::Vector3d(7 * r, -3 * r, 2 * r);
   const Corrections c(3, shift);
   dem::OcTreeMoveStats stats;
-  const auto moved = fusion.Moved(From(c), &stats);
+  const auto moved = fusion.tree()->MovedCopy(From(c), &stats);
   const auto before = Leaves(*fusion.tree());
   const auto after = Leaves(*moved);
   ASSERT_EQ(after.size(), before.size());
@@ -114,7 +112,7 @@ TEST(OctoMapMove, AQuarterTurnAboutAVoxelCornerIsAPermutation) {
   Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
   turn.linear() << 0, -1, 0, 1, 0, 0, 0, 0, 1;  // exact, not through cos(π/2)
   const Corrections c(3, turn);
-  const auto moved = fusion.Moved(From(c));
+  const auto moved = fusion.tree()->MovedCopy(From(c));
   const auto before = Leaves(*fusion.tree());
   const auto after = Leaves(*moved);
   ASSERT_EQ(after.size(), before.size());
@@ -143,7 +141,7 @@ TEST(OctoMapMove, EachBlockFollowsTheLastFrameThatSawItsSurface) {
   Corrections c(4);
   c[1] = one_metre;
   dem::OcTreeMoveStats stats;
-  const auto moved = fusion.Moved(From(c), &stats);
+  const auto moved = fusion.tree()->MovedCopy(From(c), &stats);
   const octomap::OcTree& tree = *fusion.tree();
   const auto before = Leaves(tree);
   const auto after = Leaves(*moved);
@@ -163,7 +161,7 @@ TEST(OctoMapMove, EachBlockFollowsTheLastFrameThatSawItsSurface) {
   EXPECT_NEAR(stats.max_shift_m, 1.0, 1e-6);
 
   fusion.InsertFrame(Patch(20.0, 0.0, 1), {20.0, 0.0, 1.5}, 3);
-  const auto again = fusion.Moved(From(c), &stats);
+  const auto again = fusion.tree()->MovedCopy(From(c), &stats);
   std::size_t surface = 0, stayed = 0;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     if (it.getX() < 10.0 || it.getX() > 30.0 || !tree.isNodeOccupied(*it)) continue;
@@ -191,8 +189,8 @@ TEST(OctoMapMove, TagsAreKeptAcrossACheckpoint) {
   Corrections c(3);
   c[0] = T;
   c[2] = T.inverse();
-  EXPECT_EQ(dem::FullOcTreeBytes(*restored.Moved(From(c))),
-            dem::FullOcTreeBytes(*saved.Moved(From(c))));
+  EXPECT_EQ(dem::FullOcTreeBytes(*restored.tree()->MovedCopy(From(c))),
+            dem::FullOcTreeBytes(*saved.tree()->MovedCopy(From(c))));
 
   std::stringstream old_state;
   const std::int32_t schedule[2] = {0, 0};
@@ -202,7 +200,7 @@ TEST(OctoMapMove, TagsAreKeptAcrossACheckpoint) {
   from_old.Restore(old_state);
   EXPECT_TRUE(from_old.tree()->block_frames().empty());
   dem::OcTreeMoveStats stats;
-  EXPECT_EQ(dem::FullOcTreeBytes(*from_old.Moved(From(c), &stats)),
+  EXPECT_EQ(dem::FullOcTreeBytes(*from_old.tree()->MovedCopy(From(c), &stats)),
             dem::FullOcTreeBytes(*saved.tree()));
   EXPECT_EQ(stats.leaves_moved, 0u);
 
@@ -223,7 +221,7 @@ TEST(OctoMapMove, ASmallTurnKeepsNearlyEveryVoxel) {
   T.translation() = Eigen::Vector3d(0.123, 0.456, 0.0);
   const Corrections c(3, T);
   dem::OcTreeMoveStats stats;
-  const auto moved = fusion.Moved(From(c), &stats);
+  const auto moved = fusion.tree()->MovedCopy(From(c), &stats);
   EXPECT_EQ(stats.dropped, 0u);
   EXPECT_GT(static_cast<double>(stats.leaves_out), 0.97 * static_cast<double>(stats.leaves_in));
   std::size_t occupied = 0, landed = 0;
