@@ -73,10 +73,11 @@ CLI::App* AddServeCommand(CLI::App* app, ServeArgs* args) {
       "Takes frames/NNNNNN.* with NNNNNN.odom from the inbox in index order once complete,\n"
       "publishes the replay outputs and status.json into OUT (serve.publish_every), journals\n"
       "every frame and snapshots the state in OUT/checkpoint, so a restart resumes where it\n"
-      "stopped. SIGTERM/SIGINT: finish the frame, publish, checkpoint, exit 0; a second signal\n"
-      "exits at once (1). Exit status: 0 stopped by a signal, 1 failure (OUT served by another\n"
-      "daemon, cannot write, unusable checkpoint files), 2 usage or config error, bad\n"
-      "sequence.yaml, or a checkpoint made with another configuration.\n");
+      "stopped. SIGTERM/SIGINT: finish the frame, checkpoint, publish what is not out yet,\n"
+      "exit 0; a second signal exits at once (1). Exit status: 0 stopped by a signal,\n"
+      "1 failure (OUT served by another daemon, cannot write, unusable checkpoint files),\n"
+      "2 usage or config error, bad sequence.yaml, or a checkpoint made with another\n"
+      "configuration.\n");
   return cmd;
 }
 

@@ -38,7 +38,9 @@ struct ServeOptions {
   /// [fraction] the largest share of the frames' processing time snapshots may take: a snapshot
   /// grows with the map, so one that is due waits until the frames since the last took
   /// 1/checkpoint_share times as long as that one did; 0 = a snapshot every checkpoint_every.
-  double checkpoint_share = 0.1;
+  /// With publish_share, the daemon's writing through a backlog stays within a tenth of the
+  /// frames' time, the margin serve is held to against replay (docs/serve.md, checkpoints).
+  double checkpoint_share = 0.05;
   /// [frames] a snapshot is never put off longer than this many frames (a restart re-fuses at
   /// most this many).
   int checkpoint_max_every = 100;

@@ -182,7 +182,10 @@ void Daemon::Run(const std::atomic<int>& stop) {
     checkpoint_->Save(*mapper_, state_, graph_run_.get());
     since_checkpoint_ = 0;
   }
-  Publish();
+  // Outputs written after the last frame (a queue that ran dry is published at once) from the
+  // fixes there are now are current: publishing them again would solve the graph and write the
+  // same files once more.
+  if (published_through_ != state_.next_index || published_gnss_ != GnssCsvSignature()) Publish();
   publisher_.Wait();
   WriteStatus("stopped", waiting_);
   Log("serve: stopped after frame " + std::to_string(state_.next_index) + " (" +
@@ -462,6 +465,7 @@ void Daemon::RejectLate(const FrameFiles& files) {
 }
 
 std::optional<GraphOutcome> Daemon::SolveAndLogGraph() {
+  solved_gnss_ = GnssCsvSignature();  // before the fixes are read: a later change is seen
   std::optional<GraphOutcome> graph;
   try {
     graph =
@@ -503,6 +507,8 @@ void Daemon::Publish(bool write) {
   }
   unwritten_frames_ = 0;
   unwritten_ms_ = 0.0;
+  published_through_ = state_.next_index;
+  published_gnss_ = solved_gnss_;
   RunInfo run;
   run.sequence = setup_.inbox.string();
   // Frames per second over the frames' own processing time: the daemon idles between frames.
@@ -531,6 +537,16 @@ std::vector<io::GnssFix> Daemon::InboxFixes() {
     fixes_error_ = e.what();
   }
   return fixes_;
+}
+
+std::string Daemon::GnssCsvSignature() const {
+  std::error_code error;
+  const fs::path path = inbox_.directory() / "gnss.csv";
+  const std::uintmax_t size = fs::file_size(path, error);
+  if (error) return "";
+  const auto time = fs::last_write_time(path, error);
+  if (error) return "";
+  return std::to_string(size) + "@" + std::to_string(time.time_since_epoch().count());
 }
 
 void Daemon::WriteStatus(const char* state, std::size_t waiting) {

@@ -122,6 +122,8 @@ class Daemon {
   /// The fixes of the inbox's gnss.csv (none without it; the last readable ones while it is
   /// being written and a line is broken).
   std::vector<io::GnssFix> InboxFixes();
+  /// gnss.csv's size and modification time ("" without the file): whether the fixes changed.
+  std::string GnssCsvSignature() const;
   void WriteStatus(const char* state, std::size_t waiting);
   void Log(const std::string& line) const {
     if (setup_.log) setup_.log(line);
@@ -144,8 +146,12 @@ class Daemon {
   std::unique_ptr<Checkpoint> checkpoint_;
   DaemonState state_;
   std::optional<Clock::time_point> gap_since_;
-  int since_publish_ = 0;                        // frames since the last solve (at publish_every)
-  int unwritten_frames_ = 0;                     // frames since the last publication written
+  int since_publish_ = 0;     // frames since the last solve (at publish_every)
+  int unwritten_frames_ = 0;  // frames since the last publication written
+  // When this run last wrote its outputs, state_.next_index and the gnss.csv its graph read: on
+  // exit, whether they are current (fixes appended since need a publication, frames or not).
+  std::optional<std::size_t> published_through_;
+  std::string published_gnss_, solved_gnss_;
   double unwritten_ms_ = 0.0;                    // their processing time
   double last_handover_ms_ = 0.0;                // the last publication's share on this thread
   std::optional<GraphOutcome> unwritten_graph_;  // the last solve, when not yet written

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/inotify.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -184,7 +185,9 @@ TEST_F(Serve, ABacklogIsReadAheadAndGivesReplaysOutputs) {
 
 // When the queue runs dry the daemon publishes what it has: the last frames' maps do not wait
 // for serve.publish_every more frames (here 100) or for the daemon to stop.
-TEST_F(Serve, AnIdleDaemonPublishesItsLastFrames) {
+// And a daemon stopped after that publication leaves its files as they are: they cover every
+// frame already (publishing again solved the graph and wrote every output a second time).
+TEST_F(Serve, AnIdleDaemonPublishesItsLastFramesAndStopsWithoutWritingThemAgain) {
   const fs::path inbox = MakeInbox(kTinyCloud, 5, "inbox");
   const fs::path out = dir_ / "out";
   const pid_t pid = Start(inbox, out, "log", {"--set", "serve.publish_every=100"});
@@ -202,7 +205,19 @@ TEST_F(Serve, AnIdleDaemonPublishesItsLastFrames) {
   EXPECT_EQ(summary["frames"], 5) << Slurp(dir_ / "log");
   EXPECT_TRUE(fs::exists(out / "dem.tif"));
   EXPECT_EQ(nlohmann::json::parse(Slurp(out / "status.json"))["state"], "running");
+  // Every output is renamed into place when written: a file written again is a new inode.
+  const auto inode = [](const fs::path& file) {
+    struct stat st {};
+    return ::stat(file.c_str(), &st) == 0 ? st.st_ino : ino_t{0};
+  };
+  const ino_t summary_inode = inode(out / "summary.json");
+  const ino_t dem_inode = inode(out / "dem.tif");
+  ASSERT_NE(summary_inode, ino_t{0});
   Stop(pid);
+  EXPECT_EQ(nlohmann::json::parse(Slurp(out / "status.json"))["state"], "stopped");
+  EXPECT_EQ(inode(out / "summary.json"), summary_inode) << Slurp(dir_ / "log");
+  EXPECT_EQ(inode(out / "dem.tif"), dem_inode);
+  EXPECT_EQ(nlohmann::json::parse(Slurp(out / "summary.json"))["frames"], 5);
 }
 
 // status.json with frames queued: at most every serve.status_interval_s (here never), yet
