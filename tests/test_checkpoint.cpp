@@ -222,16 +222,16 @@ TEST_F(CheckpointTest, AnotherConfigurationOrADamagedSnapshotIsRefused) {
 }
 
 // The snapshot cadence: checkpoint_every frames at least; then it waits for its share of the
-// processing time (the last snapshot took 200 ms; 10 frames of 63 ms are not enough, 32 are),
+// processing time (the last snapshot took 200 ms; 10 frames of 63 ms are not enough, 64 are),
 // but never past checkpoint_max_every; share 0 is exactly every checkpoint_every.
 TEST(SnapshotDue, WaitsForItsShareOfTheProcessingTimeUpToTheLimit) {
-  mapper::ServeOptions o;  // every 10, share 0.1, at most every 100
+  mapper::ServeOptions o;  // every 10, share 0.05, at most every 100
   EXPECT_FALSE(mapper::SnapshotDue(o, 9, 1e6, 0.0));
   EXPECT_TRUE(mapper::SnapshotDue(o, 10, 630.0, 0.0));  // the first
-  EXPECT_TRUE(mapper::SnapshotDue(o, 10, 630.0, 60.0));
+  EXPECT_TRUE(mapper::SnapshotDue(o, 10, 630.0, 30.0));
   EXPECT_FALSE(mapper::SnapshotDue(o, 10, 630.0, 200.0));
-  EXPECT_FALSE(mapper::SnapshotDue(o, 31, 31 * 63.0, 200.0));
-  EXPECT_TRUE(mapper::SnapshotDue(o, 32, 32 * 63.0, 200.0));
+  EXPECT_FALSE(mapper::SnapshotDue(o, 63, 63 * 63.0, 200.0));
+  EXPECT_TRUE(mapper::SnapshotDue(o, 64, 64 * 63.0, 200.0));
   EXPECT_FALSE(mapper::SnapshotDue(o, 99, 99.0, 1e6));
   EXPECT_TRUE(mapper::SnapshotDue(o, 100, 100.0, 1e6));
   o.checkpoint_share = 0.0;
