@@ -10,7 +10,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ostream>
 #include <sstream>
+#include <streambuf>
 #include <system_error>
 #include <type_traits>
 #include <utility>
@@ -27,6 +29,51 @@ constexpr char kSnapshotMagic[8] = {'R', 'M', 'S', 'T', 'A', 'T', 'E', '9'};
 constexpr std::uint32_t kRecordMagic = 0x334A4D52;  // "RMJ3"
 constexpr const char* kSnapshotName = "state.bin";
 constexpr const char* kJournalName = "journal.bin";
+
+// An std::ostream's bytes appended to a string through a 64 KiB buffer (large writes go straight
+// in): the OctoMap's state, most of a snapshot, is serialised into the snapshot itself. Through
+// an ostringstream it was copied three more times (the stream's doubling, str(), the append).
+class AppendBuffer : public std::streambuf {
+ public:
+  explicit AppendBuffer(std::string* out) : out_(out) { Reset(); }
+  AppendBuffer(const AppendBuffer&) = delete;
+  AppendBuffer& operator=(const AppendBuffer&) = delete;
+  ~AppendBuffer() override { Flush(); }
+  void Flush() {
+    out_->append(pbase(), static_cast<std::size_t>(pptr() - pbase()));
+    Reset();
+  }
+
+ protected:
+  int_type overflow(int_type c) override {
+    Flush();
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    *pptr() = traits_type::to_char_type(c);
+    pbump(1);
+    return c;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    if (n > epptr() - pptr()) {
+      Flush();
+      if (n >= static_cast<std::streamsize>(buffer_.size())) {
+        out_->append(s, static_cast<std::size_t>(n));
+        return n;
+      }
+    }
+    std::memcpy(pptr(), s, static_cast<std::size_t>(n));
+    pbump(static_cast<int>(n));
+    return n;
+  }
+  int sync() override {
+    Flush();
+    return 0;
+  }
+
+ private:
+  void Reset() { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
+  std::array<char, 1 << 16> buffer_{};
+  std::string* out_;
+};
 
 // Plain values appended in the machine's byte order: the checkpoint is read back by the
 // machine that wrote it.
@@ -415,9 +462,16 @@ struct CheckpointAccess {
       PutVector(w, records);
       PutVector(w, evidence);
     }
-    std::ostringstream octomap(std::ios::out | std::ios::binary);
-    if (!m.octomap_.Fusion().Save(octomap)) throw CheckpointError("cannot serialise the OctoMap");
-    w->String(octomap.str());
+    // As Writer::String: its size, then its bytes (written in place, the size filled in after).
+    const std::size_t at = w->data().size();
+    w->Put<std::uint64_t>(0);
+    {
+      AppendBuffer buffer(&w->data());
+      std::ostream octomap(&buffer);
+      if (!m.octomap_.Fusion().Save(octomap)) throw CheckpointError("cannot serialise the OctoMap");
+    }
+    const std::uint64_t size = w->data().size() - at - sizeof(std::uint64_t);
+    std::memcpy(w->data().data() + at, &size, sizeof(size));
   }
 
   // GraphRun's tracks: a flag and the state of each (a track the run has not is read and
