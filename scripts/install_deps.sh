@@ -41,7 +41,9 @@ export DEBIAN_FRONTEND=noninteractive
 # ROVERMAP_APT_LOCK_POLL_S seconds until the deadline.
 lock_wait_s="${ROVERMAP_APT_LOCK_WAIT_S:-600}"
 lock_poll_s="${ROVERMAP_APT_LOCK_POLL_S:-5}"
-lock_deadline=$((SECONDS + lock_wait_s))
+# In microseconds of the wall clock: bash's SECONDS counts whole seconds of it, so a deadline of
+# SECONDS + 1 could pass a few milliseconds after the start, before a single retry.
+lock_deadline_us=$((${EPOCHREALTIME/[.,]/} + lock_wait_s * 1000000))
 
 apt_get() {
   local errors timeout=0 waiting=""
@@ -52,7 +54,7 @@ apt_get() {
       rm -f "$errors"
       return 0
     fi
-    if ! grep -q "Could not get lock" "$errors" || ((SECONDS >= lock_deadline)); then
+    if ! grep -q "Could not get lock" "$errors" || ((${EPOCHREALTIME/[.,]/} >= lock_deadline_us)); then
       [[ -n $waiting ]] && echo "install_deps: gave up waiting for the package manager's lock" \
         "after ${lock_wait_s} s (ROVERMAP_APT_LOCK_WAIT_S)" >&2
       cat "$errors" >&2
@@ -66,7 +68,7 @@ apt_get() {
       waiting=yes
     fi
     sleep "$lock_poll_s"
-    timeout=$((lock_deadline - SECONDS))
+    timeout=$(((lock_deadline_us - ${EPOCHREALTIME/[.,]/}) / 1000000))
     ((timeout > 0)) || timeout=0
   done
 }
