@@ -89,6 +89,22 @@ class Writer {
     data_.append(static_cast<const char*>(data), size);
   }
   void String(std::string_view s) { Bytes(s.data(), s.size()); }
+  /// As Bytes, for what `write` puts into an std::ostream, streamed in place (the size filled
+  /// in after); returns what `write` returned.
+  template <typename Write>
+  bool Streamed(const Write& write) {
+    const std::size_t at = data_.size();
+    Put<std::uint64_t>(0);
+    bool ok = false;
+    {
+      AppendBuffer buffer(&data_);
+      std::ostream out(&buffer);
+      ok = write(out);
+    }
+    const std::uint64_t size = data_.size() - at - sizeof(std::uint64_t);
+    std::memcpy(data_.data() + at, &size, sizeof(size));
+    return ok;
+  }
   template <typename Derived>
   void Matrix(const Eigen::MatrixBase<Derived>& m) {
     for (Eigen::Index r = 0; r < m.rows(); ++r)
@@ -462,16 +478,8 @@ struct CheckpointAccess {
       PutVector(w, records);
       PutVector(w, evidence);
     }
-    // As Writer::String: its size, then its bytes (written in place, the size filled in after).
-    const std::size_t at = w->data().size();
-    w->Put<std::uint64_t>(0);
-    {
-      AppendBuffer buffer(&w->data());
-      std::ostream octomap(&buffer);
-      if (!m.octomap_.Fusion().Save(octomap)) throw CheckpointError("cannot serialise the OctoMap");
-    }
-    const std::uint64_t size = w->data().size() - at - sizeof(std::uint64_t);
-    std::memcpy(w->data().data() + at, &size, sizeof(size));
+    if (!w->Streamed([&](std::ostream& out) { return m.octomap_.Fusion().Save(out); }))
+      throw CheckpointError("cannot serialise the OctoMap");
   }
 
   // GraphRun's tracks: a flag and the state of each (a track the run has not is read and
