@@ -213,6 +213,12 @@ std::vector<KeyEntry> BuildRegistry() {
              "sun direction, from east counter-clockwise");
   sim.Double("image_noise", &M::image_noise, "grey", AtLeast(0), "sensor noise sigma");
   sim.Double("max_range_m", &M::max_range_m, "m", GreaterThan(0), "farther is sky");
+  sim.Double("baseline_error", &M::baseline_error, "ratio", Bounds{0, false, 0.2, false},
+             "sigma of the rig's true baseline against the stated one, drawn per traverse; 0 = "
+             "exact");
+  sim.Double("mount_error_deg", &M::mount_error_deg, "deg", Bounds{0, false, 5, false},
+             "sigma of the camera's true mounting rotation about each axis against the stated "
+             "one, drawn per traverse; 0 = exact");
   sim.Int("cloud_stride_px", &M::cloud_stride_px, "px", AtLeast(1), "cloud mode: pixel stride");
   sim.Double("disparity_sigma_px", &M::disparity_sigma_px, "px", AtLeast(0),
              "cloud mode: disparity noise");

@@ -59,6 +59,13 @@ struct SimOptions {
   double sun_azimuth_deg = 135.0;  ///< from east, counter-clockwise
   double image_noise = 2.0;        ///< sensor noise σ [grey levels]
   double max_range_m = 20.0;       ///< rays longer than this see sky
+  /// The rig's calibration error: the images (and cloud points) come from a rig that differs
+  /// from the one sequence.yaml states, drawn once per traverse from `seed`, as a field
+  /// calibration leaves it: the baseline's scale and the camera's mounting rotation on the
+  /// body. A baseline error scales every depth (and every registered step) alike; a mounting
+  /// error turns every step's direction and tilts the points. 0 = the rig is exactly as stated.
+  double baseline_error = 0.0;   ///< σ of the true baseline's relative error [ratio]
+  double mount_error_deg = 0.0;  ///< σ of the true mounting's error about each axis [deg]
 
   // Cloud mode: ray-cast points with the stereo error model.
   int cloud_stride_px = 4;  ///< one point per stride × stride pixels

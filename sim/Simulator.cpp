@@ -28,6 +28,7 @@ constexpr std::uint64_t kSaltImageNoise = 1000;
 constexpr std::uint64_t kSaltCloud = 2000;
 constexpr std::uint64_t kSaltOdometry = 3000;
 constexpr std::uint64_t kSaltGnss = 4000;
+constexpr std::uint64_t kSaltRig = 5000;
 
 double WrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
@@ -50,6 +51,8 @@ const SimOptions& Validated(const SimOptions& o) {
   Require(o.max_range_m > 0, "max_range_m > 0");
   Require(o.disparity_locking >= 0 && o.disparity_locking <= 1, "disparity_locking in [0, 1]");
   Require(o.range_quantisation_m >= 0, "range_quantisation_m >= 0");
+  Require(o.baseline_error >= 0 && o.baseline_error <= 0.2, "baseline_error in [0, 0.2]");
+  Require(o.mount_error_deg >= 0 && o.mount_error_deg <= 5, "mount_error_deg in [0, 5]");
   return o;
 }
 
@@ -115,6 +118,18 @@ Simulator::Simulator(const SimOptions& options)
           .toRotationMatrix() *
       io::RotationFromRpy(-M_PI / 2, 0, -M_PI / 2);
   T_body_sensor_.translation() = Eigen::Vector3d(o.mast_forward_m, 0, o.mast_height_m);
+  // The rig the images come from: one draw per traverse (sim.baseline_error, mount_error_deg).
+  const Eigen::Vector3d mount_error =
+      o.mount_error_deg * kDegToRad *
+      Eigen::Vector3d(HashNormal(o.seed, kSaltRig, 0, 0), HashNormal(o.seed, kSaltRig, 0, 1),
+                      HashNormal(o.seed, kSaltRig, 0, 2));
+  T_body_sensor_true_ = T_body_sensor_;
+  if (mount_error.norm() > 0.0) {
+    T_body_sensor_true_.linear() =
+        T_body_sensor_.linear() *
+        Eigen::AngleAxisd(mount_error.norm(), mount_error.normalized()).toRotationMatrix();
+  }
+  baseline_true_m_ = o.baseline_m * (1.0 + o.baseline_error * HashNormal(o.seed, kSaltRig, 0, 3));
 
   // True poses: height, roll and pitch from the terrain under the four wheels.
   for (int k = 0; k < o.frames; ++k) {
@@ -182,8 +197,8 @@ io::CameraModel Simulator::camera() const {
 }
 
 Eigen::Isometry3d Simulator::CameraPose(std::size_t index, bool right) const {
-  Eigen::Isometry3d T = truth_.at(index).T_world_body * T_body_sensor_;
-  if (right) T = T * Eigen::Translation3d(options_.baseline_m, 0, 0);
+  Eigen::Isometry3d T = truth_.at(index).T_world_body * T_body_sensor_true_;
+  if (right) T = T * Eigen::Translation3d(baseline_true_m_, 0, 0);
   return T;
 }
 
@@ -229,6 +244,8 @@ SimCloud Simulator::RenderCloud(std::size_t index) const {
   const Eigen::Isometry3d T_world_camera = CameraPose(index, false);
   const Eigen::Matrix3d R_camera_world = T_world_camera.linear().transpose();
   const double fb = c.fx * c.baseline_m;
+  // The disparity comes from the true baseline; the sensor triangulates with the stated one.
+  const double fb_true = c.fx * baseline_true_m_;
   SimCloud out;
   for (int v = 0; v < c.height; v += o.cloud_stride_px) {
     for (int u = 0; u < c.width; u += o.cloud_stride_px) {
@@ -242,8 +259,8 @@ SimCloud Simulator::RenderCloud(std::size_t index) const {
       // Stereo error model: noisy (u, v, d) triangulated again.
       const double un = u + o.pixel_sigma_px * HashNormal(o.seed, kSaltCloud, index, 4 * pixel);
       const double vn = v + o.pixel_sigma_px * HashNormal(o.seed, kSaltCloud, index, 4 * pixel + 1);
-      double d =
-          fb / z_true + o.disparity_sigma_px * HashNormal(o.seed, kSaltCloud, index, 4 * pixel + 2);
+      double d = fb_true / z_true +
+                 o.disparity_sigma_px * HashNormal(o.seed, kSaltCloud, index, 4 * pixel + 2);
       if (Hash01(o.seed, kSaltCloud + 1, index, pixel) < o.outlier_fraction) {
         // Outlier: a wrong match anywhere on the ray between 0.5 m and max range.
         const double z = 0.5 + (o.max_range_m - 0.5) * Hash01(o.seed, kSaltCloud + 2, index, pixel);

@@ -49,7 +49,14 @@ class Simulator {
   const std::vector<io::StampedPose>& truth() const { return truth_; }
   /// Dead-reckoning poses (same timestamps), starting at the true first pose.
   const std::vector<io::StampedPose>& odometry() const { return odometry_; }
+  /// The mounting sequence.yaml states; the images are rendered from T_body_sensor_true().
   const Eigen::Isometry3d& T_body_sensor() const { return T_body_sensor_; }
+  /// The mounting the images come from: T_body_sensor() turned by this traverse's draw of
+  /// sim.mount_error_deg (the same when it is 0).
+  const Eigen::Isometry3d& T_body_sensor_true() const { return T_body_sensor_true_; }
+  /// The baseline the images come from [m]: sim.baseline_m scaled by this traverse's draw of
+  /// sim.baseline_error; camera() states sim.baseline_m.
+  double baseline_true_m() const { return baseline_true_m_; }
   io::CameraModel camera() const;
 
   /// Rectified 8-bit grey pair of frame `index` (left camera = sensor frame, right camera
@@ -86,6 +93,8 @@ class Simulator {
   std::vector<io::StampedPose> truth_;
   std::vector<io::StampedPose> odometry_;
   Eigen::Isometry3d T_body_sensor_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_body_sensor_true_ = Eigen::Isometry3d::Identity();
+  double baseline_true_m_ = 0.0;
 };
 
 }  // namespace rovermap::sim

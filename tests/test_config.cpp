@@ -232,7 +232,8 @@ TEST(Keys, EveryKeyWritesAndPrintsItsOwnField) {
       "tf_static",
       "moon",
       "[1.0, 2.0, 3.0]",  // bag.odometry_source, T_body_sensor_source, body, 3-vectors
-      "[1.0, 2.0]"};      // 2-vectors (sim.reference_offset_m)
+      "[1.0, 2.0]",       // 2-vectors (sim.reference_offset_m)
+      "0.01"};            // sim.baseline_error: in [0, 0.2]
   for (const std::string& key : KnownKeys()) {
     // geometry=curve is only valid with point_to_point residuals: start from there.
     std::vector<std::string> base;

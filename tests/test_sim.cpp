@@ -355,6 +355,57 @@ TEST(Simulator, CloudModeFollowsTheStereoErrorModel) {
   EXPECT_NEAR(static_cast<double>(noisy.outliers) / noisy.cloud.size(), 0.1, 0.03);
 }
 
+// The rig's calibration error (sim.baseline_error, sim.mount_error_deg): one draw per traverse,
+// from the seed. The sequence states the nominal rig; the points come from the drawn one, so
+// they fit the terrain through the true mounting and baseline and miss it through the stated.
+TEST(Simulator, RigCalibrationErrorIsDrawnPerTraverseAndNotStated) {
+  SimOptions o = Tiny();
+  o.outlier_fraction = 0.0;
+  o.disparity_sigma_px = 0.0;
+  o.pixel_sigma_px = 0.0;
+  const Simulator exact(o);
+  EXPECT_TRUE(exact.T_body_sensor_true().isApprox(exact.T_body_sensor(), 0.0));
+  EXPECT_EQ(exact.baseline_true_m(), o.baseline_m);
+
+  o.baseline_error = 0.01;
+  o.mount_error_deg = 0.5;
+  const Simulator rig(o);
+  EXPECT_TRUE(rig.T_body_sensor().isApprox(exact.T_body_sensor(), 0.0));  // stated: nominal
+  EXPECT_EQ(rig.camera().baseline_m, o.baseline_m);
+  const double mount_deg = Eigen::AngleAxisd(rig.T_body_sensor().linear().transpose() *
+                                             rig.T_body_sensor_true().linear())
+                               .angle() *
+                           180.0 / M_PI;
+  const double baseline_ratio = rig.baseline_true_m() / o.baseline_m - 1.0;
+  std::printf("rig error, seed 1: mounting %.3f deg, baseline %+.4f\n", mount_deg, baseline_ratio);
+  EXPECT_GT(mount_deg, 0.0);
+  EXPECT_LT(mount_deg, 5.0 * 0.5 * std::sqrt(3.0));
+  EXPECT_NE(baseline_ratio, 0.0);
+  EXPECT_LT(std::abs(baseline_ratio), 5.0 * 0.01);
+  o.seed = 2;
+  EXPECT_NE(Simulator(o).baseline_true_m(),
+            rig.baseline_true_m());  // another traverse, another rig
+
+  // Noise-free points: on the terrain through the true rig, off it through the stated one.
+  const SimCloud cloud = rig.RenderCloud(0);
+  ASSERT_GT(cloud.cloud.size(), 500u);
+  const Eigen::Isometry3d& T_world_body = rig.truth()[0].T_world_body;
+  const double scale = rig.baseline_true_m() / o.baseline_m;  // the depth the true rig measures
+  std::vector<double> through_true, through_stated;
+  for (const Eigen::Vector3d& p : cloud.cloud.points) {
+    const Eigen::Vector3d t = T_world_body * rig.T_body_sensor_true() * (scale * p);
+    const Eigen::Vector3d s = T_world_body * rig.T_body_sensor() * p;
+    through_true.push_back(std::abs(t.z() - rig.terrain().Height(t.x(), t.y())));
+    through_stated.push_back(std::abs(s.z() - rig.terrain().Height(s.x(), s.y())));
+  }
+  std::printf(
+      "noise-free points off the terrain (median): %.2f mm through the true rig, %.2f mm "
+      "through the stated one\n",
+      1e3 * Median(through_true), 1e3 * Median(through_stated));
+  EXPECT_LT(Median(through_true), 1e-3);
+  EXPECT_GT(Median(through_stated), 5.0 * Median(through_true));
+}
+
 TEST(Simulator, TerrainGeoTiffHoldsTheTrueHeights) {
   SimOptions o = Tiny();
   o.frames = 1;
