@@ -394,6 +394,11 @@ std::vector<KeyEntry> BuildRegistry() {
              "stereo: rotation error per metre of a registered step that repeats (calibration)");
   map.Double("stereo_systematic_frames", &P::stereo_systematic_frames, "frames", GreaterThan(0),
              "stereo: steps over which the systematic part persists");
+  map.Double("rig_rotation_sigma_deg", &P::rig_rotation_sigma_deg, "deg",
+             Bounds{0, false, 10, false},
+             "rig mounting error per axis, in the DEM's sigma, unless sequence.yaml states it");
+  map.Double("rig_scale_sigma", &P::rig_scale_sigma, "ratio", Bounds{0, false, 0.2, false},
+             "rig depth scale error, in the DEM's sigma, unless sequence.yaml states it");
   map.Double("min_information", &P::min_information, "ratio", Bounds{0, false, 1, true},
              "directions with less information (relative to the best) keep dead reckoning");
   map.Double("min_information_over_noise", &P::min_information_over_noise, "ratio", AtLeast(0),

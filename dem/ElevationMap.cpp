@@ -35,11 +35,33 @@ void KalmanUpdate(float* height_m, float* variance_m2, double z, double r) {
 }
 
 // `shared` is the part of the point's variance that the cell's earlier points share with it
-// (their frames' attitude error): averaging cannot remove it, so the published variance stays
-// at least min(shared, what it was), never rising with an update.
+// (their frames' pose error, the rig's calibration): averaging cannot remove it, so the published
+// variance stays at least min(shared, what it was), never rising with an update.
 float PublishedVariance(float fused, float published_before, double shared) {
   return std::max(fused,
                   static_cast<float>(std::min(shared, static_cast<double>(published_before))));
+}
+
+// Steeper than 73° a cell's height means little; the floor keeps the variance finite.
+constexpr double kMinNormalZ = 0.3;
+
+// FrameContext::rig_*: the rig's calibration error's share of the height variance of the point
+// p (see there): ω moves it by Bω, B = rig_drift − [v]×R, which a surface of normal n reads as
+// nᵀBω / n_z, of variance σω²·|Bᵀn|² / n_z²; Bᵀn = rig_driftᵀn + Rᵀ(v × n).
+double RigHeightVariance(const Eigen::Vector3d& p, const Eigen::Vector3d* normal,
+                         const FrameContext& ctx) {
+  // The normal as HeightVariance reads it: rotated into the world, n_z floored.
+  const Eigen::Vector3d n = normal != nullptr && normal->allFinite()
+                                ? Eigen::Vector3d(ctx.R_world_cov * *normal)
+                                : Eigen::Vector3d::UnitZ();
+  const double nz = std::max(std::abs(n.z()), kMinNormalZ);
+  const Eigen::Vector3d v = p - ctx.sensor_origin_world;
+  const Eigen::Vector3d turn =
+      ctx.rig_drift.transpose() * n + ctx.R_world_body.transpose() * v.cross(n);
+  const double along = n.dot(p - ctx.rig_scale_origin.value_or(ctx.sensor_origin_world));
+  return (ctx.rig_rotation_variance_rad2 * turn.squaredNorm() +
+          ctx.rig_scale_variance * along * along) /
+         (nz * nz);
 }
 
 }  // namespace
@@ -269,7 +291,9 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
   const auto zf = static_cast<float>(z);
   const auto rf = static_cast<float>(r_update);
   if (v.count == 0) {
-    v = {zf, rf, zf, zf, 1, frame, frame, rf};
+    // Published from the first point on at no less than the share every frame repeats.
+    const auto published = static_cast<float>(std::max(r_update, shared_m2));
+    v = {zf, published, zf, zf, 1, frame, frame, rf};
     e = {1, 0};
     ++tile.filled;
     bounds_.Extend(cell);
@@ -292,10 +316,11 @@ bool ElevationMap::FuseAt(CellIndex cell, double z, double r, double r_update, s
       into_primary = false;
       if (stats != nullptr) ++stats->candidate;
     } else {
-      // The candidate keeps only its fused variance; the new primary publishes it as it is.
+      // The candidate keeps only its fused variance; the new primary publishes it, kept from
+      // falling below the shared share of the point that made it take over.
       std::swap(v.elevation_m, c.height_m);
       std::swap(v.fused_variance_m2, c.variance_m2);
-      v.variance_m2 = v.fused_variance_m2;
+      v.variance_m2 = std::max(v.fused_variance_m2, static_cast<float>(shared_m2));
       std::swap(v.count, c.count);
       std::swap(v.first_frame, c.start_frame);
       v.last_frame = frame;
@@ -414,13 +439,14 @@ FusionStats ElevationMap::FuseFrameWith(std::size_t n, const At& at, bool use_co
   const Eigen::Matrix<double, 2, 3> horizontal = ctx.R_world_cov.topRows<2>();
   const double max_h = options_.max_horizontal_sigma_cells * options_.cell_size_m;
   const bool limit_h = use_cov && options_.max_horizontal_sigma_cells > 0.0;
+  const bool use_rig = ctx.rig_rotation_variance_rad2 > 0.0 || ctx.rig_scale_variance > 0.0;
 
   // Pass 1: each point's cell and height variance, or why it is dropped. The cells go in their
   // own array, which CountPerCell takes as it is.
   struct Fusable {
     double z;
     double r;
-    double shared;  // the attitude's share of r (attitude_error_shared), else 0
+    double shared;  // the share every frame repeats (attitude_error_shared, FrameContext::rig_*)
   };
   std::vector<Fusable> fusable;
   std::vector<CellIndex> cells;
@@ -468,6 +494,7 @@ FusionStats ElevationMap::FuseFrameWith(std::size_t n, const At& at, bool use_co
         shared = ja.dot(pose_block.topLeftCorner<2, 2>() * ja);
       }
     }
+    if (use_rig) shared += RigHeightVariance(p, normal, ctx);
     if (!std::isfinite(r) || r < 0.0) {
       ++stats.dropped_nonfinite;
       continue;
@@ -500,8 +527,6 @@ double ElevationMap::HeightVariance(const Eigen::Vector3d& p, const Eigen::Matri
   }
   // The sign of the normal cancels in both terms below; n_z's does not.
   const Eigen::Vector3d n = R_world_cov * *normal;
-  // Steeper than 73° a cell's height means little; the floor keeps the variance finite.
-  constexpr double kMinNormalZ = 0.3;
   const double nz = std::max(std::abs(n.z()), kMinNormalZ);
   const double across = covariance != nullptr ? normal->dot(*covariance * *normal)
                                               : options_.default_point_stddev_m *

@@ -97,7 +97,8 @@ struct ElevationMapOptions {
   /// true keeps a cell's published variance (CellValue::variance_m2) from falling below the
   /// attitude's share of the updating point's variance, or below what it was before the
   /// update; the fusion's own variance, hence the heights, are unchanged. Its position share
-  /// still averages over frames. docs/maps.md, "The published σ".
+  /// still averages over frames (the rig's share, FrameContext::rig_*, does not). docs/maps.md,
+  /// "The published σ".
   bool attitude_error_shared = true;
   /// Visibility clearing (ElevationMap::ClearSeenThrough): a published surface that a later
   /// frame's rays pass under, toward points it saw beyond, is no longer there (a person, a car
@@ -137,7 +138,7 @@ struct CellValue {
   static constexpr float kEmpty = std::numeric_limits<float>::quiet_NaN();
   float elevation_m = kEmpty;  ///< fused height [m] (world z)
   /// Variance of elevation_m as published [m^2]: fused_variance_m2, kept from falling below the
-  /// attitude's share (ElevationMapOptions::attitude_error_shared).
+  /// shares every frame repeats (ElevationMapOptions::attitude_error_shared, FrameContext::rig_*).
   float variance_m2 = kEmpty;
   float min_m = kEmpty;           ///< lowest point taken into either hypothesis [m]
   float max_m = kEmpty;           ///< highest such point [m]
@@ -211,6 +212,21 @@ struct FrameContext {
   /// perturbation applied on the left in the world frame about sensor_origin_world: the point
   /// p moves by δθ×(p − c) + δt. Adds J Σ Jᵀ, J = ∂z/∂(δθ, δt) = (dy, −dx, 0, 0, 0, 1).
   std::optional<Eigen::Matrix<double, 6, 6>> pose_covariance;
+  /// The rig's calibration error, which every frame repeats (io::RigCalibrationSigma): the
+  /// sensor's mounting rotation ω (in the body frame, R_world_body into the world), variance
+  /// per axis [rad²], and the relative scale s of its depths [ratio²]. Registered with that
+  /// rig, every step turned by ω and scaled by s too, so by this frame the chain has moved the
+  /// sensor by rig_drift·ω + s·(c − rig_scale_origin) (the chain's start), and a point p at v =
+  /// p − c from the sensor moves by δ = (rig_drift − [v]×R_world_body)·ω + s·(p −
+  /// rig_scale_origin). Its height variance gains σω²·|δ's map ᵀn|² + σs²·(n·(p − o))², over
+  /// n_z² (n the surface normal, else up), shared by the frames that see a cell: it bounds the
+  /// published variance as the attitude's share does, whatever attitude_error_shared says, and
+  /// leaves the heights alone. The defaults (no drift, o = c) are a single frame's.
+  double rig_rotation_variance_rad2 = 0.0;
+  double rig_scale_variance = 0.0;
+  Eigen::Matrix3d rig_drift = Eigen::Matrix3d::Zero();         ///< [m/rad] δc = rig_drift·ω
+  Eigen::Matrix3d R_world_body = Eigen::Matrix3d::Identity();  ///< ω's frame into the world
+  std::optional<Eigen::Vector3d> rig_scale_origin;             ///< [m, world]; nullopt = the sensor
   /// Optional unit surface normals, one per point, in the covariances' frame (rotated by
   /// R_world_cov into the world); their sign does not matter. See slope_aware_variance.
   const std::vector<Eigen::Vector3d>* normals = nullptr;

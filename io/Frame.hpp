@@ -11,6 +11,7 @@
 
 #include "io/CameraModel.hpp"
 #include "io/Georeference.hpp"  // GeodeticOrigin
+#include "io/RigCalibration.hpp"
 #include "io/SensorType.hpp"
 #include "registration/PointCloud.hpp"
 
@@ -27,6 +28,9 @@ struct SequenceInfo {
   /// (a quaternion recomputed from the matrix can differ in its last bit, and the matcher's
   /// stopping point with it).
   std::optional<Eigen::Quaterniond> body_sensor_quaternion;
+  /// How well the rig is calibrated, when the recording says (sensor.calibration_sigma); else
+  /// the mapper assumes a field calibration's (mapper.rig_*_sigma).
+  std::optional<RigCalibrationSigma> calibration_sigma;
   GeodeticOrigin origin;  ///< of the world (local ENU) frame
   double frame_rate_hz = 0.0;
   std::string body = "earth";  ///< earth|moon|mars

@@ -83,6 +83,12 @@ void WriteSequenceYaml(const fs::path& dir, const SequenceInfo& info, const std:
                 info.sensor_type == SensorType::kCloud ? "cloud" : "stereo", t.x(), t.y(), t.z(),
                 q.x(), q.y(), q.z(), q.w());
   yaml += buffer;
+  if (info.calibration_sigma) {
+    std::snprintf(buffer, sizeof(buffer),
+                  "  calibration_sigma:\n    rotation_deg: %.17g\n    scale: %.17g\n",
+                  info.calibration_sigma->rotation_deg, info.calibration_sigma->scale);
+    yaml += buffer;
+  }
   if (info.camera) {
     const CameraModel& c = *info.camera;
     std::snprintf(buffer, sizeof(buffer),
@@ -140,6 +146,7 @@ SequenceInfo ReadSequenceInfo(const fs::path& sequence_dir) {
     info.body_sensor_quaternion = Eigen::Quaterniond(q[3], q[0], q[1], q[2]);
     info.T_body_sensor.linear() = RotationFromQuaternion(*info.body_sensor_quaternion);
   }
+  info.calibration_sigma = yaml.calibration_sigma;
   info.origin = {yaml.latitude_deg, yaml.longitude_deg, yaml.altitude_m};
   info.frame_rate_hz = yaml.frame_rate_hz;
   info.body = yaml.body;

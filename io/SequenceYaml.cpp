@@ -130,8 +130,8 @@ SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::pat
   r.Map(root, "", {"sensor", "camera", "origin", "frame_rate", "body"});
 
   SequenceYaml out;
-  const YAML::Node sensor =
-      r.Map(r.Required(root, "", "sensor"), "sensor", {"type", "T_body_sensor"});
+  const YAML::Node sensor = r.Map(r.Required(root, "", "sensor"), "sensor",
+                                  {"type", "T_body_sensor", "calibration_sigma"});
   out.sensor_type =
       r.Word(r.Required(sensor, "sensor", "type"), "sensor.type", {"stereo", "cloud"});
 
@@ -154,6 +154,21 @@ SequenceYaml ParseSequenceYaml(std::string_view text, const std::filesystem::pat
     out.quaternion_xyzw = q;
   } else {
     r.Fail(T.Mark(), tkey, "missing rotation_rpy_deg (or quaternion)");
+  }
+
+  if (const YAML::Node sigma = sensor["calibration_sigma"]) {
+    const std::string key = "sensor.calibration_sigma";
+    r.Map(sigma, key, {"rotation_deg", "scale"});
+    auto bounded = [&](const char* name, double max, const char* max_text) {
+      const YAML::Node node = r.Required(sigma, key, name);
+      const double value = r.Number(node, key + "." + name);
+      if (!(value >= 0.0 && value <= max)) {
+        r.Fail(node.Mark(), key + "." + name, std::string("must be in [0, ") + max_text + "]");
+      }
+      return value;
+    };
+    out.calibration_sigma =
+        RigCalibrationSigma{bounded("rotation_deg", 10.0, "10"), bounded("scale", 0.2, "0.2")};
   }
 
   if (const YAML::Node camera = root["camera"]) {

@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "io/CameraModel.hpp"
+#include "io/RigCalibration.hpp"
 
 namespace rovermap::io {
 
@@ -22,10 +23,11 @@ constexpr long long kMaxImagePixels = 1LL << 30;
 /// checks on each value. Exactly one of `rotation_rpy_deg` and `quaternion_xyzw` is set.
 struct SequenceYaml {
   std::string sensor_type;                                ///< "stereo" or "cloud"
-  std::optional<CameraModel> camera;                  ///< required for stereo
+  std::optional<CameraModel> camera;                      ///< required for stereo
   std::array<double, 3> translation{};                    ///< T_body_sensor translation [m]
   std::optional<std::array<double, 3>> rotation_rpy_deg;  ///< R = Rz(y)·Ry(p)·Rx(r) [deg]
   std::optional<std::array<double, 4>> quaternion_xyzw;   ///< unit quaternion x y z w
+  std::optional<RigCalibrationSigma> calibration_sigma;   ///< sensor.calibration_sigma
   double latitude_deg = 0.0;                              ///< origin, [-90, 90]
   double longitude_deg = 0.0;                             ///< origin, [-180, 180]
   double altitude_m = 0.0;                                ///< origin
@@ -39,7 +41,8 @@ struct SequenceYaml {
 ///        value has the wrong type or is out of range (non-positive focal length, baseline, size
 ///        or frame rate; principal point outside the image; latitude/longitude out of range; a
 ///        quaternion that is not unit length within 1e-3; both or neither of rotation_rpy_deg
-///        and quaternion), or a stereo sequence has no camera.
+///        and quaternion; a calibration_sigma without both of its keys, or one negative or above
+///        its bound: rotation_deg 10, scale 0.2), or a stereo sequence has no camera.
 SequenceYaml ReadSequenceYaml(const std::filesystem::path& path);
 
 /// ReadSequenceYaml on text already read; `path` only names the file in messages.

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/Skew.hpp"
 #include "core/Stopwatch.hpp"
 #include "mapper/Degeneracy.hpp"
 #include "mapper/ImageCheck.hpp"
@@ -486,6 +487,29 @@ void Mapper::Fuse(const registration::PointCloud& cloud, const std::vector<unsig
   T_about_sensor.translation() -= ctx.sensor_origin_world;
   const Matrix6d A = Adjoint(T_about_sensor);
   ctx.pose_covariance = A * step.covariance * A.transpose();
+  const io::RigCalibrationSigma rig = rig_calibration();
+  const double rig_rotation_rad = rig.rotation_deg * M_PI / 180.0;
+  ctx.rig_rotation_variance_rad2 = rig_rotation_rad * rig_rotation_rad;
+  ctx.rig_scale_variance = rig.scale * rig.scale;
+  if (ctx.rig_rotation_variance_rad2 > 0.0 || ctx.rig_scale_variance > 0.0) {
+    // The rig's error turned and scaled every step before this one alike (FrameContext::rig_*):
+    // a step Δc from a pose of rotation R moves by (Rω) × Δc = −[Δc]×R ω.
+    const Eigen::Isometry3d* before = nullptr;
+    for (const FrameResult& earlier : results_) {
+      if (earlier.step.index >= step.index) break;
+      if (before != nullptr)
+        ctx.rig_drift -=
+            core::Skew(earlier.step.T_world_body.translation() - before->translation()) *
+            before->linear();
+      before = &earlier.step.T_world_body;
+    }
+    if (before != nullptr) {
+      ctx.rig_drift -= core::Skew(T.translation() - before->translation()) * before->linear();
+      ctx.rig_scale_origin =
+          results_.front().step.T_world_body * sensor_.T_body_sensor.translation();
+    }
+    ctx.R_world_body = T.linear();
+  }
   result->dem = elevation_map_.FuseFrame(T, measured, between, ctx);
   // What stood where this frame sees through is gone (a car, a person, another rover).
   result->dem.cells_cleared =

@@ -207,6 +207,12 @@ class Mapper {
   const io::SequenceInfo& sequence() const { return sequence_; }
   const PipelineOptions& options() const { return options_; }
   const SensorSetup& sensor() const { return sensor_; }
+  /// The rig's calibration σ that the DEM's σ carries: sequence.yaml's sensor.calibration_sigma
+  /// when the recording states it, else mapper.rig_rotation_sigma_deg and rig_scale_sigma.
+  io::RigCalibrationSigma rig_calibration() const {
+    return sequence_.calibration_sigma.value_or(io::RigCalibrationSigma{
+        options_.mapper.rig_rotation_sigma_deg, options_.mapper.rig_scale_sigma});
+  }
 
  private:
   struct Registered;               // the outcome of register + judge + blend

@@ -113,6 +113,14 @@ struct MapperOptions {
   double stereo_systematic_deg_per_m = 0.03;
   double stereo_systematic_frames = 100.0;
 
+  /// The rig's calibration error assumed for a recording whose sequence.yaml does not state it
+  /// (sensor.calibration_sigma): σ of the sensor's mounting rotation about each axis [deg] and
+  /// of its depths' scale [ratio]. Every frame repeats it, so the DEM's published σ does not
+  /// average it away (dem::FrameContext::rig_*): a 0.4° tilt is 3.5 cm at 5 m. The defaults are
+  /// what stereo_systematic_ratio stands for (0.7 % of a step along and across it, 0.4°).
+  double rig_rotation_sigma_deg = 0.4;
+  double rig_scale_sigma = 0.007;
+
   /// Degeneracy: a direction of the registration's information whose eigenvalue, relative to
   /// the largest (rotations scaled by the cloud's extent, as `conditioning`), falls below this
   /// keeps the dead-reckoning prediction [ratio]. 0 = always take the registration.

@@ -189,7 +189,11 @@ nlohmann::json Summary(const OutputState& state, const RunInfo& run,
         {"tiles", state.dem_tiles},
         {"cell_size_m", state.dem.cell_size_m},
         {"outliers_removed", outliers},
-        {"cells_cleared", cleared}}},
+        {"cells_cleared", cleared},
+        {"rig_calibration_sigma",
+         {{"rotation_deg", state.rig_calibration.rotation_deg},
+          {"scale", state.rig_calibration.scale},
+          {"source", state.rig_calibration_stated ? "sequence.yaml" : "assumed"}}}}},
   };
   if (state.stereo_num_disparities) {
     summary["stereo"] = {{"num_disparities", *state.stereo_num_disparities}};

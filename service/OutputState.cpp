@@ -27,6 +27,8 @@ OutputState::OutputState(const Mapper& mapper, std::optional<GraphOutcome> graph
     distance_m = chain->path_length_m();
     final_correction = chain->back().cumulative_correction;
   }
+  rig_calibration = mapper.rig_calibration();
+  rig_calibration_stated = mapper.sequence().calibration_sigma.has_value();
   if (mapper.sensor().type == io::SensorType::kStereo)
     stereo_num_disparities = mapper.sensor().stereo.num_disparities;
 }

@@ -42,6 +42,10 @@ struct OutputState {
   double distance_m = 0.0;  ///< path length of the registered chain
   Eigen::Isometry3d final_correction = Eigen::Isometry3d::Identity();
   std::optional<int> stereo_num_disparities;  ///< stereo sequences only
+  /// The rig's calibration σ the DEM's σ carries (Mapper::rig_calibration), and whether the
+  /// recording stated it (sensor.calibration_sigma) or the mapper assumed it (mapper.rig_*).
+  io::RigCalibrationSigma rig_calibration;
+  bool rig_calibration_stated = false;
   terrain::TerrainOptions terrain;            ///< terrain.tif and terrain.png
   /// The pose graph's outcome (replay with GNSS fixes, docs/graph.md); set by the caller. When
   /// solved, trajectory.tum, the metrics and the previews are its poses, and the chained ones

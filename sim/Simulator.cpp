@@ -334,6 +334,9 @@ SimulateResult Simulator::WriteSequence(
       o.sensor == SensorKind::kCloud ? io::SensorType::kCloud : io::SensorType::kStereo;
   info.camera = camera();
   info.T_body_sensor = T_body_sensor_;
+  // The rig's calibration as a calibration report would state it: the σ the error was drawn
+  // from (0 for the exact rig), so that the DEM's σ carries what the rig may be off by.
+  info.calibration_sigma = io::RigCalibrationSigma{o.mount_error_deg, o.baseline_error};
   info.origin = {o.origin_latitude_deg, o.origin_longitude_deg, o.origin_altitude_m};
   info.frame_rate_hz = o.frame_rate_hz;
   io::WriteSequenceYaml(dir, info,

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -177,13 +178,22 @@ TEST_F(MosaicTraverses, CoregistrationBringsThreeTraversesOntoTheTrueTerrain) {
   EXPECT_LT(c_on.rmse_m, 0.8 * c_off.rmse_m);
   // With the chained covariance made honest (the stereo scale and the systematic part), each DEM's
   // σ carries its traverse's pose uncertainty, and fewer of C's cells stand 3σ off the others: band
-  // 4 sums to 0 and 7 (136 before; RMSE 0.87 and 1.17 cm). Later: 0 and 49 without the DEM
-  // sharing the attitude's error (dem.attitude_error_shared), 0 and 35 with it (RMSE 0.84 and
-  // 1.20 cm).
+  // 4 sums to 0 and 7 (136 before; RMSE 0.87 and 1.17 cm); 0 and 35 with the attitude's error
+  // shared by a cell's frames. With the pose's whole error shared (dem.pose_error_shared: the
+  // chain's height drifts too), C's 6 mm RMS offset from A and B lies within 3σ everywhere (band 4
+  // 0 and 0), so the correction shows in the heights: C's overlap 6.0 -> 2.6 mm RMS, the mosaic
+  // 0.85 against 1.20 cm.
+  std::printf(
+      "mosaic: RMSE on %.4f off %.4f m; band 4 on %.0f off %.0f; C's overlap RMS %.4f -> "
+      "%.4f m\n",
+      c_on.rmse_m, c_off.rmse_m, d_on, d_off, on["inputs"][2]["rms_before_m"].get<double>(),
+      on["inputs"][2]["rms_after_m"].get<double>());
+  EXPECT_LE(d_on, d_off);
   EXPECT_LT(d_on, 2.0);
-  EXPECT_GT(d_off, 4.0);
-  EXPECT_LT(on["inputs"][2]["disagreement_after"].get<double>(),
-            0.1 * on["inputs"][2]["disagreement_before"].get<double>());
+  EXPECT_LT(on["inputs"][2]["rms_after_m"].get<double>(),
+            0.6 * on["inputs"][2]["rms_before_m"].get<double>());
+  EXPECT_LE(on["inputs"][2]["disagreement_after"].get<double>(),
+            on["inputs"][2]["disagreement_before"].get<double>());
 
   // Fused in two groups, (A+B)+C, as at once (co-registration off: fusion is associative).
   Mosaic({dems[0], dems[1]}, "ab", false);

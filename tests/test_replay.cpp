@@ -146,6 +146,11 @@ TEST_F(Replay, TinyStereoSequence) {
   EXPECT_EQ(summary["dem"]["cells"].get<std::size_t>(), valid);
   EXPECT_EQ(summary["octomap"]["leaves"].get<std::size_t>(),
             rovermap::io::ReadOctoMap(dir_ / "out" / "map.bt")->getNumLeafNodes());
+  // Its sequence.yaml does not state the rig's calibration: the DEM's σ carries the assumed one.
+  const nlohmann::json& rig = summary["dem"]["rig_calibration_sigma"];
+  EXPECT_EQ(rig["source"], "assumed");
+  EXPECT_EQ(rig["rotation_deg"].get<double>(), 0.4);
+  EXPECT_EQ(rig["scale"].get<double>(), 0.007);
 }
 
 TEST_F(Replay, NonEmptyOutputNeedsForce) {

@@ -228,6 +228,31 @@ TEST(Sequence, YamlKeepsTheBodySensorQuaternionToTheBit) {
   EXPECT_GT(recomputed_differs, 0);  // measured: 161 of 200
 }
 
+// sensor.calibration_sigma: how well the rig is calibrated, when the recording says; written
+// back as read, absent when not stated (the mapper then assumes mapper.rig_*_sigma).
+TEST(Sequence, CalibrationSigmaIsReadAndWrittenBack) {
+  const fs::path dir = MakeStereoSequence("calibration_sigma", 1);
+  EXPECT_FALSE(SequenceReader(dir).info().calibration_sigma.has_value());
+  std::string yaml = kStereoYaml;
+  const std::string after = "    quaternion: [-0.5, 0.5, -0.5, 0.5]\n";
+  yaml.insert(yaml.find(after) + after.size(),
+              "  calibration_sigma: {rotation_deg: 0.25, scale: 0.004}\n");
+  Write(dir / "sequence.yaml", yaml);
+  SequenceInfo info = SequenceReader(dir).info();
+  ASSERT_TRUE(info.calibration_sigma.has_value());
+  EXPECT_EQ(info.calibration_sigma->rotation_deg, 0.25);
+  EXPECT_EQ(info.calibration_sigma->scale, 0.004);
+  info.calibration_sigma = RigCalibrationSigma{0.1 / 3.0, 0.0};
+  WriteSequenceYaml(dir, info, "test");
+  const SequenceInfo back = ReadSequenceInfo(dir);
+  ASSERT_TRUE(back.calibration_sigma.has_value());
+  EXPECT_EQ(back.calibration_sigma->rotation_deg, 0.1 / 3.0);  // to the bit
+  EXPECT_EQ(back.calibration_sigma->scale, 0.0);
+  info.calibration_sigma.reset();
+  WriteSequenceYaml(dir, info, "test");
+  EXPECT_FALSE(ReadSequenceInfo(dir).calibration_sigma.has_value());
+}
+
 TEST(Sequence, ShippedSimulatedSequencesAreValid) {
   const fs::path datasets(ROVERMAP_DATASETS_DIR);
   for (const char* name : {"sim_tiny_cloud", "sim_tiny_stereo"}) {
@@ -364,6 +389,24 @@ TEST(SequenceErrors, UnknownKeysAndStructure) {
                        "sensor.T_body_sensor.translation: expected a list of 3 numbers"));
   EXPECT_TRUE(Contains(StereoYamlError("camera:\n", "camera_:\n"), "camera_: unknown key"));
   EXPECT_TRUE(Contains(StereoYamlError("frame_rate: 10\n", "frame_rate: [10\n"), "invalid YAML"));
+}
+
+TEST(SequenceErrors, BadCalibrationSigma) {
+  const std::string at = "    quaternion: [-0.5, 0.5, -0.5, 0.5]\n";
+  auto with = [&](const std::string& sigma) {
+    return StereoYamlError(at, at + "  calibration_sigma: " + sigma + "\n");
+  };
+  EXPECT_TRUE(
+      Contains(with("{rotation_deg: -0.1, scale: 0}"),
+               "sequence.yaml:6: sensor.calibration_sigma.rotation_deg: must be in [0, 10]"));
+  EXPECT_TRUE(Contains(with("{rotation_deg: 0.4, scale: 0.5}"),
+                       "sensor.calibration_sigma.scale: must be in [0, 0.2]"));
+  EXPECT_TRUE(Contains(with("{rotation_deg: 0.4}"), "sensor.calibration_sigma.scale: missing"));
+  EXPECT_TRUE(Contains(with("{rotation_deg: 0.4, scale: 0, tilt: 1}"),
+                       "sensor.calibration_sigma.tilt: unknown key"));
+  EXPECT_TRUE(Contains(with("0.4"), "sensor.calibration_sigma: expected a mapping"));
+  EXPECT_TRUE(Contains(with("{rotation_deg: x, scale: 0}"),
+                       "sensor.calibration_sigma.rotation_deg: expected a finite number"));
 }
 
 TEST(SequenceErrors, StereoNeedsCamera) {
