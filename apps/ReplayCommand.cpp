@@ -218,8 +218,7 @@ int RunReplay(const ReplayArgs& args) {
   // are fused again from its poses (a second pass over the recording).
   std::optional<mapper::GraphOutcome> graph;
   try {
-    graph =
-        graph_run->Solve(*mapper, source->info().sensor_type, source->gnss(), reference_unusable);
+    graph = graph_run->Solve(*mapper, source->gnss(), reference_unusable);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError(e.what());
   }

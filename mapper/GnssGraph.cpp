@@ -19,7 +19,8 @@ FrameGnss GnssOfFrame(const GraphOutcome& graph, std::size_t frame) {
 }
 
 std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult>& results,
-                                                   io::SensorType sensor, const MapperOptions& o) {
+                                                   const SystematicRates& systematic,
+                                                   const MapperOptions& o) {
   std::vector<graph::RelativeFactor> factors;
   for (std::size_t k = 1; k < results.size(); ++k) {
     const FrameResult& r = results[k];
@@ -34,12 +35,10 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
         r.increment_covariance.diagonal().maxCoeff() > 0.0;
     if (registered) {
       f.covariance = r.increment_covariance;
-      if (sensor == io::SensorType::kStereo) {
-        const double rot = o.stereo_systematic_deg_per_m * M_PI / 180.0 * length;
-        const double tra = o.stereo_systematic_ratio * length;
-        f.covariance.diagonal().head<3>().array() += rot * rot;
-        f.covariance.diagonal().tail<3>().array() += tra * tra;
-      }
+      const double rot = systematic.rotation_rad_per_m * length;
+      const double tra = systematic.translation_ratio * length;
+      f.covariance.diagonal().head<3>().array() += rot * rot;
+      f.covariance.diagonal().tail<3>().array() += tra * tra;
     } else {
       f.covariance = CovarianceOf(OdometryNoiseSigma(length, o));
     }
@@ -68,14 +67,12 @@ void KeepTheChainsTilt(const graph::Matrix6d& chain, graph::Matrix6d* graph) {
 
 }  // namespace
 
-std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
-                                       io::SensorType sensor, const std::vector<io::GnssFix>& fixes,
-                                       const std::vector<ReferenceMatch>& matches,
-                                       const std::vector<RevisitMatch>& revisits,
-                                       const io::Georeference& georeference,
-                                       const GraphOptions& options,
-                                       const MapperOptions& mapper_options,
-                                       const GraphOutcome* previous, std::size_t window_frames) {
+std::optional<GraphOutcome> SolveGraph(
+    const std::vector<FrameResult>& results, const SystematicRates& systematic,
+    const std::vector<io::GnssFix>& fixes, const std::vector<ReferenceMatch>& matches,
+    const std::vector<RevisitMatch>& revisits, const io::Georeference& georeference,
+    const GraphOptions& options, const MapperOptions& mapper_options, const GraphOutcome* previous,
+    std::size_t window_frames) {
   // A fix or two (a bag's origin fix) are no track to hold the trajectory to; one reference
   // match is (it holds heading as well as position).
   const bool enough_fixes =
@@ -201,7 +198,7 @@ std::optional<GraphOutcome> SolveGraph(const std::vector<FrameResult>& results,
     poses.push_back(prior);
   }
   out.solution = graph::SolvePoseGraph(
-      initial, RelativeFactors(results, sensor, mapper_options),
+      initial, RelativeFactors(results, systematic, mapper_options),
       enough_fixes ? positions : std::vector<graph::PositionFactor>{}, poses, solver, loops);
   if (!solver.covariance && out.solution.solved) {
     out.solution.covariance_message = "not computed: " + std::to_string(results.size()) +

@@ -17,6 +17,7 @@
 #include "mapper/Mapper.hpp"
 #include "mapper/ReferenceMatch.hpp"
 #include "mapper/Revisit.hpp"
+#include "mapper/SystematicRates.hpp"
 
 namespace rovermap::mapper {
 
@@ -69,12 +70,12 @@ FrameReference RevisitOfFrame(const GraphOutcome& graph, std::size_t frame);
 ChainStep ReportedStep(const FrameResult& result, const GraphOutcome* graph);
 
 /// The relative factor of every frame k >= 1 (frame k−1 to k): the chained increment, with the
-/// registration's covariance plus the per-step σ of the stereo rig's systematic error
-/// (mapper.stereo_systematic_*; a white-noise stand-in for an error the graph does not model
-/// as repeating), or dead reckoning's noise (mapper.odometry_noise_*) where dead reckoning
+/// registration's covariance plus the per-step σ of the rig's systematic error (`systematic`,
+/// SystematicRatesOf; a white-noise stand-in for an error the graph does not model as
+/// repeating), or dead reckoning's noise (mapper.odometry_noise_*) where dead reckoning
 /// carried the step. Never throws.
 std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult>& results,
-                                                   io::SensorType sensor,
+                                                   const SystematicRates& systematic,
                                                    const MapperOptions& options);
 
 /// Solves the graph of `results` with `fixes` (geodetic, placed in the world frame by
@@ -89,7 +90,7 @@ std::vector<graph::RelativeFactor> RelativeFactors(const std::vector<FrameResult
 /// bounded solve; graph::PoseGraphOptions::first_free_node).
 /// @throw std::invalid_argument if the options are invalid.
 std::optional<GraphOutcome> SolveGraph(
-    const std::vector<FrameResult>& results, io::SensorType sensor,
+    const std::vector<FrameResult>& results, const SystematicRates& systematic,
     const std::vector<io::GnssFix>& fixes, const std::vector<ReferenceMatch>& matches,
     const std::vector<RevisitMatch>& revisits, const io::Georeference& georeference,
     const GraphOptions& options, const MapperOptions& mapper_options,

@@ -55,12 +55,14 @@ std::vector<std::string> GraphRun::AfterFrame(const Mapper& mapper, const FrameB
   return lines;
 }
 
-std::optional<GraphOutcome> GraphRun::Solve(const Mapper& mapper, io::SensorType sensor,
+std::optional<GraphOutcome> GraphRun::Solve(const Mapper& mapper,
                                             const std::vector<io::GnssFix>& fixes,
                                             const std::string& reference_unusable,
                                             std::size_t window_frames) {
   std::optional<GraphOutcome> graph = SolveGraph(
-      mapper.results(), sensor, fixes, track_ ? track_->matches() : std::vector<ReferenceMatch>{},
+      mapper.results(),
+      SystematicRatesOf(mapper.sensor().type, mapper.rig_calibration(), setup_.mapper), fixes,
+      track_ ? track_->matches() : std::vector<ReferenceMatch>{},
       revisit_ ? revisit_->matches() : std::vector<RevisitMatch>{}, mapper.georeference(),
       setup_.graph, setup_.mapper, last_ ? &*last_ : nullptr, window_frames);
   last_ = graph;

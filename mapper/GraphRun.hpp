@@ -50,8 +50,7 @@ class GraphRun {
   /// last Solve put them (a daemon's bounded solve; the first solves, and any after one that
   /// was not solved, are whole).
   /// @throw std::invalid_argument if the options are invalid.
-  std::optional<GraphOutcome> Solve(const Mapper& mapper, io::SensorType sensor,
-                                    const std::vector<io::GnssFix>& fixes,
+  std::optional<GraphOutcome> Solve(const Mapper& mapper, const std::vector<io::GnssFix>& fixes,
                                     const std::string& reference_unusable = "",
                                     std::size_t window_frames = 0);
 

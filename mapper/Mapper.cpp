@@ -9,6 +9,7 @@
 #include "mapper/Degeneracy.hpp"
 #include "mapper/ImageCheck.hpp"
 #include "mapper/OutlierFilter.hpp"
+#include "mapper/SystematicRates.hpp"
 #include "registration/RangeVoxels.hpp"
 #include "stereo/Stereo.hpp"
 
@@ -440,15 +441,14 @@ ChainStep Mapper::Chain(const io::Frame& frame,
   // Products of many small rotations drift off orthogonality (the matcher's iterates, the
   // chain); PoseChain takes only proper rotations, so project onto the nearest one.
   increment.linear() = Eigen::Quaterniond(increment.linear()).normalized().toRotationMatrix();
-  // Part of a stereo step's error repeats from step to step, in proportion to the step
-  // (SystematicError): the rig's calibration. Measured on KITTI; cloud frames have none.
+  // Part of a step's error repeats from step to step, in proportion to the step
+  // (SystematicError): the rig's calibration, and stereo's own bias (SystematicRatesOf).
   const MapperOptions& o = options_.mapper;
-  const double length =
-      sensor_.type == io::SensorType::kStereo ? increment.translation().norm() : 0.0;
+  const double length = increment.translation().norm();
+  const SystematicRates rates = SystematicRatesOf(sensor_.type, rig_calibration(), o);
   SystematicError systematic;
-  systematic.sigma << Eigen::Vector3d::Constant(o.stereo_systematic_deg_per_m * M_PI / 180.0 *
-                                                length),
-      Eigen::Vector3d::Constant(o.stereo_systematic_ratio * length);
+  systematic.sigma << Eigen::Vector3d::Constant(rates.rotation_rad_per_m * length),
+      Eigen::Vector3d::Constant(rates.translation_ratio * length);
   systematic.persistence = std::exp(-1.0 / o.stereo_systematic_frames);
   return chain_->Add(frame.T_world_body_odom, increment, covariance_in_previous, systematic);
 }

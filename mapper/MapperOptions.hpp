@@ -104,7 +104,9 @@ struct MapperOptions {
 
   /// The part of a registered stereo increment's error that repeats from step to step, per
   /// metre of the step: a rig's calibration (baseline, focal length, rectification) scales and
-  /// turns every step alike [ratio of the step's length; deg per metre]. Cloud frames: none.
+  /// turns every step alike [ratio of the step's length; deg per metre]. Stereo only; the rig's
+  /// own calibration (rig_*_sigma, or what sequence.yaml states) sets it for clouds and bounds
+  /// it from below for stereo (SystematicRatesOf).
   /// Chained as a systematic error (PoseChain, SystematicError) that persists over about
   /// `stereo_systematic_frames` steps [frames], so it adds up linearly instead of as a
   /// random walk. On KITTI (1 m steps) these give a chained NEES close to the 6 expected

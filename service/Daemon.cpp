@@ -469,7 +469,7 @@ std::optional<GraphOutcome> Daemon::SolveAndLogGraph() {
   std::optional<GraphOutcome> graph;
   try {
     graph =
-        graph_run_->Solve(*mapper_, sequence_.sensor_type, InboxFixes(), reference_unusable_,
+        graph_run_->Solve(*mapper_, InboxFixes(), reference_unusable_,
                           static_cast<std::size_t>(std::max(setup_.serve.graph_window_frames, 0)));
   } catch (const std::invalid_argument& e) {
     Log(std::string("serve: pose graph not solved: ") + e.what());
